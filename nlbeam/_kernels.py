@@ -1,0 +1,761 @@
+"""Compiled kernels: excitation, element forces, right-hand side, event-exact Runge-Kutta.
+
+Private. Every function here takes arrays, writes into preallocated outputs and returns an
+integer status; none validates input, draws random numbers or raises. The Python layer
+(``nlbeam.integrate``) checks arguments and turns status codes into messages.
+
+System arrays (``sysa``, built by ``nlbeam.System.kernel_arrays``), N DOFs, ne elements:
+    MinvK (N,N), MinvC (N,N), mek (N,), mec (N,)   a = mek*y + mec*y' - MinvC v - MinvK x - sum mw_e f_e
+    etype (ne,) int64, ew (ne,N), ewy (ne,), egap (ne,), epar (ne,4), mw (ne,N) = M^-1 w_e
+Element e: delta_e = ew_e . x + ewy_e * y - egap_e, generalised force -ew_e f_e.
+Discrete state ``disc`` (ne, 2): [in_contact (0/1), delta'_minus].
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+# element types
+INACTIVE = -1
+HERTZ = 0
+LANKARANI = 1
+HUNT_CROSSLEY = 2
+CUBIC = 3
+PWL_STOP = 4
+
+# methods
+RK2 = 0
+RK4 = 1
+DP5 = 2
+
+# status codes
+OK = 0
+ERR_EXCITATION_RANGE = 1
+ERR_NONFINITE = 2
+ERR_EVENT = 3
+ERR_MAX_STEPS = 4
+ERR_STEP_UNDERFLOW = 5
+
+# --- Butcher tableaus: (A, b, b_hat, c) -----------------------------------------------------
+_A_RK2 = np.array([[0.0, 0.0], [1.0, 0.0]])
+_B_RK2 = np.array([0.5, 0.5])
+_C_RK2 = np.array([0.0, 1.0])
+
+_A_RK4 = np.array([[0.0, 0.0, 0.0, 0.0], [0.5, 0.0, 0.0, 0.0], [0.0, 0.5, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]])
+_B_RK4 = np.array([1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0])
+_C_RK4 = np.array([0.0, 0.5, 0.5, 1.0])
+
+_A_DP5 = np.array([
+    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [1.0 / 5.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0, 0.0],
+    [19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0, 0.0, 0.0, 0.0],
+    [9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0, 0.0, 0.0],
+    [35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0, 0.0],
+])
+_B_DP5 = np.array([35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0, 0.0])
+_BH_DP5 = np.array([5179.0 / 57600.0, 0.0, 7571.0 / 16695.0, 393.0 / 640.0, -92097.0 / 339200.0,
+                    187.0 / 2100.0, 1.0 / 40.0])
+_C_DP5 = np.array([0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0])
+
+_T_C_HERTZ = 2.943275  # contact time of a free mass on a Hertz stop, in units d_max / v0
+
+
+# --- excitation ------------------------------------------------------------------------------
+@njit(cache=True)
+def excite(t, code, p, tab):
+    """(y, y', y'', status) at time t (s)."""
+    if code == 0:
+        arg = p[1] * t + p[2]
+        c = math.cos(arg)
+        s = math.sin(arg)
+        return p[0] * c, -p[0] * p[1] * s, -p[0] * p[1] * p[1] * c, 0
+    elif code == 1:
+        h = p[1]
+        n = tab.shape[0]
+        u = (t - p[0]) / h
+        if u < -1e-9 or u > (n - 1) + 1e-9:
+            return 0.0, 0.0, 0.0, ERR_EXCITATION_RANGE
+        i = int(math.floor(u))
+        if i < 0:
+            i = 0
+        if i > n - 2:
+            i = n - 2
+        th = u - i
+        th2 = th * th
+        th3 = th2 * th
+        h00 = 2.0 * th3 - 3.0 * th2 + 1.0
+        h10 = th3 - 2.0 * th2 + th
+        h01 = -2.0 * th3 + 3.0 * th2
+        h11 = th3 - th2
+        y = h00 * tab[i, 0] + h10 * h * tab[i, 1] + h01 * tab[i + 1, 0] + h11 * h * tab[i + 1, 1]
+        if math.isnan(tab[i, 2]):
+            yd = (1.0 - th) * tab[i, 1] + th * tab[i + 1, 1]
+            ydd = (tab[i + 1, 1] - tab[i, 1]) / h
+        else:
+            yd = h00 * tab[i, 1] + h10 * h * tab[i, 2] + h01 * tab[i + 1, 1] + h11 * h * tab[i + 1, 2]
+            d00 = (6.0 * th2 - 6.0 * th) / h
+            d10 = 3.0 * th2 - 4.0 * th + 1.0
+            d01 = (-6.0 * th2 + 6.0 * th) / h
+            d11 = 3.0 * th2 - 2.0 * th
+            ydd = d00 * tab[i, 1] + d10 * tab[i, 2] + d01 * tab[i + 1, 1] + d11 * tab[i + 1, 2]
+        return y, yd, ydd, 0
+    else:
+        y = 0.0
+        yd = 0.0
+        ydd = 0.0
+        for k in range(tab.shape[0]):
+            w = tab[k, 0]
+            arg = w * t + tab[k, 2]
+            c = math.cos(arg)
+            s = math.sin(arg)
+            y += tab[k, 1] * c
+            yd -= tab[k, 1] * w * s
+            ydd -= tab[k, 1] * w * w * c
+        return y, yd, ydd, 0
+
+
+@njit(cache=True)
+def excitation_many(code, p, tab, t, out):
+    """Evaluate (y, y') at every t into out (n, 2); status of the first failure."""
+    for i in range(t.shape[0]):
+        y, yd, ydd, st = excite(t[i], code, p, tab)
+        if st != 0:
+            return st
+        out[i, 0] = y
+        out[i, 1] = yd
+    return 0
+
+
+# --- elements ----------------------------------------------------------------------------------
+@njit(cache=True)
+def element_force(et, par, delta, ddelta, vminus, in_contact):
+    """Force f (>= 0 pushes out when clamped) and df/d(delta), df/d(delta'), df/d(delta'_minus)."""
+    if et == CUBIC:
+        return par[0] * delta ** 3, 3.0 * par[0] * delta * delta, 0.0, 0.0
+    if et == INACTIVE or in_contact == 0.0 or delta <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    K = par[0]
+    if et == PWL_STOP:
+        return K * delta, K, 0.0, 0.0
+    d05 = math.sqrt(delta)
+    d15 = delta * d05
+    if et == HERTZ:
+        f = K * d15
+        dfd = 1.5 * K * d05
+        dfdd = 0.0
+        dfdv = 0.0
+    elif et == LANKARANI:
+        c = 0.75 * (1.0 - par[1] * par[1]) / vminus
+        fac = 1.0 + c * ddelta
+        f = K * d15 * fac
+        dfd = 1.5 * K * d05 * fac
+        dfdd = K * d15 * c
+        dfdv = -K * d15 * c * ddelta / vminus
+    else:  # HUNT_CROSSLEY
+        mu = par[2]
+        f = (K + mu * ddelta) * d15
+        dfd = 1.5 * (K + mu * ddelta) * d05
+        dfdd = mu * d15
+        dfdv = 0.0
+    if par[3] != 0.0 and f < 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    return f, dfd, dfdd, dfdv
+
+
+@njit(cache=True)
+def has_event(et):
+    return et == HERTZ or et == LANKARANI or et == HUNT_CROSSLEY or et == PWL_STOP
+
+
+@njit(cache=True)
+def kinematics(e, s, y, yd, sysa):
+    """(delta, delta') of element e."""
+    ew = sysa[5]
+    N = ew.shape[1]
+    d = sysa[6][e] * y - sysa[7][e]
+    dd = sysa[6][e] * yd
+    for j in range(N):
+        d += ew[e, j] * s[j]
+        dd += ew[e, j] * s[N + j]
+    return d, dd
+
+
+# --- right-hand side with optional variational equations ----------------------------------------
+@njit(cache=True)
+def deriv(t, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, ks, kP, fel):
+    """ks = f(t, s); with want_var also kP = J P + (da/d vminus) dvm. fel (ne,) gets the
+    element forces. Returns status."""
+    MinvK = sysa[0]
+    MinvC = sysa[1]
+    mek = sysa[2]
+    mec = sysa[3]
+    etype = sysa[4]
+    ew = sysa[5]
+    epar = sysa[8]
+    mw = sysa[9]
+    N = MinvK.shape[0]
+    ne = etype.shape[0]
+    y, yd, ydd, st = excite(t, xc, xp, xtab)
+    if st != 0:
+        return st
+    for i in range(N):
+        ks[i] = s[N + i]
+        acc = mek[i] * y + mec[i] * yd
+        for j in range(N):
+            acc -= MinvK[i, j] * s[j] + MinvC[i, j] * s[N + j]
+        ks[N + i] = acc
+    if want_var:
+        m = P.shape[1]
+        for c in range(m):
+            for i in range(N):
+                kP[i, c] = P[N + i, c]
+                acc = 0.0
+                for j in range(N):
+                    acc -= MinvK[i, j] * P[j, c] + MinvC[i, j] * P[N + j, c]
+                kP[N + i, c] = acc
+    for e in range(ne):
+        d, dd = kinematics(e, s, y, yd, sysa)
+        f, dfd, dfdd, dfdv = element_force(etype[e], epar[e], d, dd, disc[e, 1], disc[e, 0])
+        fel[e] = f
+        if f == 0.0 and dfd == 0.0 and dfdd == 0.0:
+            continue
+        for i in range(N):
+            ks[N + i] -= mw[e, i] * f
+        if want_var:
+            m = P.shape[1]
+            for c in range(m):
+                dx = 0.0
+                dv = 0.0
+                for j in range(N):
+                    dx += ew[e, j] * P[j, c]
+                    dv += ew[e, j] * P[N + j, c]
+                g = dfd * dx + dfdd * dv + dfdv * dvm[e, c]
+                for i in range(N):
+                    kP[N + i, c] -= mw[e, i] * g
+    return 0
+
+
+# --- one explicit Runge-Kutta step --------------------------------------------------------------
+@njit(cache=True)
+def tableau(meth):
+    if meth == RK2:
+        return _A_RK2, _B_RK2, _B_RK2, _C_RK2
+    elif meth == RK4:
+        return _A_RK4, _B_RK4, _B_RK4, _C_RK4
+    return _A_DP5, _B_DP5, _BH_DP5, _C_DP5
+
+
+@njit(cache=True)
+def rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
+            s_out, P_out, KS, KP, ytmp, Ptmp, fel, err_w):
+    """Advance (s, P) by h. f0 is f(t, s) (stage 0, reused when not want_var).
+    For DP5 err_w gets the embedded error vector. Returns status."""
+    A, B, BH, Cc = tableau(meth)
+    ns = B.shape[0]
+    n = s.shape[0]
+    m = P.shape[1]
+    for i in range(ns):
+        if i == 0 and not want_var:
+            for q in range(n):
+                KS[0, q] = f0[q]
+            continue
+        for q in range(n):
+            acc = s[q]
+            for j in range(i):
+                acc += h * A[i, j] * KS[j, q]
+            ytmp[q] = acc
+        if want_var:
+            for q in range(n):
+                for c in range(m):
+                    acc = P[q, c]
+                    for j in range(i):
+                        acc += h * A[i, j] * KP[j, q, c]
+                    Ptmp[q, c] = acc
+        st = deriv(t + Cc[i] * h, ytmp, Ptmp, dvm, disc, want_var, sysa, xc, xp, xtab, KS[i], KP[i], fel)
+        if st != 0:
+            return st
+    for q in range(n):
+        acc = s[q]
+        for j in range(ns):
+            acc += h * B[j] * KS[j, q]
+        s_out[q] = acc
+        if not math.isfinite(acc):
+            return ERR_NONFINITE
+    if meth == DP5:
+        for q in range(n):
+            acc = 0.0
+            for j in range(ns):
+                acc += h * (B[j] - BH[j]) * KS[j, q]
+            err_w[q] = acc
+    if want_var:
+        for q in range(n):
+            for c in range(m):
+                acc = P[q, c]
+                for j in range(ns):
+                    acc += h * B[j] * KP[j, q, c]
+                P_out[q, c] = acc
+    return 0
+
+
+# --- dense output: quintic Hermite in x through (x, v, a) at both ends -------------------------
+@njit(cache=True)
+def hermite5(x0, v0, a0, x1, v1, a1, h, th):
+    """(x, x') at t0 + th*h of the quintic through x, x', x'' at both ends."""
+    t2 = th * th
+    t3 = t2 * th
+    t4 = t3 * th
+    t5 = t4 * th
+    H0 = 1.0 - 10.0 * t3 + 15.0 * t4 - 6.0 * t5
+    H1 = th - 6.0 * t3 + 8.0 * t4 - 3.0 * t5
+    H2 = 0.5 * t2 - 1.5 * t3 + 1.5 * t4 - 0.5 * t5
+    H3 = 10.0 * t3 - 15.0 * t4 + 6.0 * t5
+    H4 = -4.0 * t3 + 7.0 * t4 - 3.0 * t5
+    H5 = 0.5 * t3 - t4 + 0.5 * t5
+    D0 = -30.0 * t2 + 60.0 * t3 - 30.0 * t4
+    D1 = 1.0 - 18.0 * t2 + 32.0 * t3 - 15.0 * t4
+    D2 = th - 4.5 * t2 + 6.0 * t3 - 2.5 * t4
+    D3 = 30.0 * t2 - 60.0 * t3 + 30.0 * t4
+    D4 = -12.0 * t2 + 28.0 * t3 - 15.0 * t4
+    D5 = 1.5 * t2 - 4.0 * t3 + 2.5 * t4
+    x = H0 * x0 + h * H1 * v0 + h * h * H2 * a0 + H3 * x1 + h * H4 * v1 + h * h * H5 * a1
+    xd = (D0 * x0 + D3 * x1) / h + D1 * v0 + D4 * v1 + h * (D2 * a0 + D5 * a1)
+    return x, xd
+
+
+@njit(cache=True)
+def step_extrema(s0, f0, s1, f1, h, N, xmax):
+    """Update xmax[i] with max |x_i| over a step, refined on the quintic dense output."""
+    for i in range(N):
+        a = abs(s1[i])
+        if a > xmax[i]:
+            xmax[i] = a
+        v0 = s0[N + i]
+        v1 = s1[N + i]
+        if v0 * v1 < 0.0:
+            lo = 0.0
+            hi = 1.0
+            th = v0 / (v0 - v1)
+            for _ in range(60):
+                x, xd = hermite5(s0[i], v0, f0[N + i], s1[i], v1, f1[N + i], h, th)
+                if (xd > 0.0) == (v0 > 0.0):
+                    lo = th
+                else:
+                    hi = th
+                # Newton on x' with the second derivative by a secant of the interpolant
+                if hi - lo < 1e-15:
+                    break
+                th = 0.5 * (lo + hi)
+            x, xd = hermite5(s0[i], v0, f0[N + i], s1[i], v1, f1[N + i], h, th)
+            if abs(x) > xmax[i]:
+                xmax[i] = abs(x)
+
+
+# --- event location on the step map ---------------------------------------------------------------
+@njit(cache=True)
+def delta_after(meth, t, tau, s, P, dvm, disc, e, sign, sysa, xc, xp, xtab, f0,
+                s_out, P_out, KS, KP, ytmp, Ptmp, fel, err_w):
+    """sign * delta_e after one step of length tau from (t, s); status in the second slot."""
+    st = rk_step(meth, t, tau, s, P, dvm, disc, False, sysa, xc, xp, xtab, f0,
+                 s_out, P_out, KS, KP, ytmp, Ptmp, fel, err_w)
+    if st != 0:
+        return 0.0, st
+    y, yd, ydd, st = excite(t + tau, xc, xp, xtab)
+    d, dd = kinematics(e, s_out, y, yd, sysa)
+    return sign * d, st
+
+
+@njit(cache=True)
+def locate(meth, t, lo, hi, phi_lo, phi_hi, s, P, dvm, disc, e, sign, sysa, xc, xp, xtab, f0,
+           s_out, P_out, KS, KP, ytmp, Ptmp, fel, err_w):
+    """Root of phi(tau) = sign*delta_e(step(s, tau)) in [lo, hi], phi_lo <= 0 < phi_hi, by the
+    Illinois method. Returns (tau_hi, status): the bracket end on the far side (phi >= 0), at
+    most a few ulps of t from the root."""
+    side = 0
+    for _ in range(200):
+        if hi - lo <= 4e-16 * max(abs(t + hi), 1e-300) + 1e-300:
+            return hi, 0
+        tau = (lo * phi_hi - hi * phi_lo) / (phi_hi - phi_lo)
+        if not (tau > lo and tau < hi):
+            tau = 0.5 * (lo + hi)
+        ph, st = delta_after(meth, t, tau, s, P, dvm, disc, e, sign, sysa, xc, xp, xtab, f0,
+                             s_out, P_out, KS, KP, ytmp, Ptmp, fel, err_w)
+        if st != 0:
+            return hi, st
+        if ph >= 0.0:
+            hi = tau
+            phi_hi = ph
+            if side == 1:
+                phi_lo *= 0.5
+            side = 1
+            if ph == 0.0:
+                return hi, 0
+        else:
+            lo = tau
+            phi_lo = ph
+            if side == -1:
+                phi_hi *= 0.5
+            side = -1
+    return hi, ERR_EVENT
+
+
+# --- the integrator ---------------------------------------------------------------------------------
+@njit(cache=True)
+def contact_step(e, v0, sysa, spc):
+    """Time step inside a contact of element e that starts at penetration rate v0 (m/s):
+    the estimated contact duration divided by spc."""
+    etype = sysa[4]
+    ew = sysa[5]
+    epar = sysa[8]
+    mw = sysa[9]
+    winv = 0.0
+    for j in range(ew.shape[1]):
+        winv += ew[e, j] * mw[e, j]
+    meff = 1.0 / winv
+    K = epar[e, 0]
+    if etype[e] == PWL_STOP:
+        tc = math.pi * math.sqrt(meff / K)
+    else:
+        v = max(v0, 1e-12)
+        dmax = (1.25 * meff * v * v / K) ** 0.4
+        tc = _T_C_HERTZ * dmax / v
+    return tc / spc
+
+
+@njit(cache=True)
+def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_init, max_steps,
+                     s0, disc0, events_on, want_var, P0, dvm0, track_xmax, store_every,
+                     out_t, out_s, out_d, out_f,
+                     s_end, disc_end, P_end, dvm_end, xmax, counters, fcounters):
+    """Integrate from t0 to t_end.
+
+    Fixed-step methods (RK2, RK4) step on the grid t0 + k dt, with steps of the contact length
+    / spc while any element is in contact, and land on every contact boundary (root of the step
+    map, to a few ulps), then step on to the next grid point. DP5 controls its error with
+    (rtol, atol) and writes samples onto the grid by quintic Hermite dense output.
+    Samples: every store_every-th grid point, t0 included, and t_end.
+
+    counters: [n_stored, n_steps, n_rejected, n_rhs, n_impacts, min_steps_per_contact,
+               n_contacts, n_events]
+    fcounters: [t_reached, max |delta| at a landed event]
+    """
+    etype = sysa[4]
+    N = sysa[0].shape[0]
+    n = 2 * N
+    ne = etype.shape[0]
+    m = P0.shape[1]
+    A, B, BH, Cc = tableau(meth)
+    ns = B.shape[0]
+    KS = np.zeros((ns, n))
+    KP = np.zeros((ns, n, m))
+    ytmp = np.zeros(n)
+    Ptmp = np.zeros((n, m))
+    fel = np.zeros(ne)
+    err_w = np.zeros(n)
+    s = s0.copy()
+    P = P0.copy()
+    dvm = dvm0.copy()
+    disc = disc0.copy()
+    s_new = np.zeros(n)
+    P_new = np.zeros((n, m))
+    s_try = np.zeros(n)
+    P_try = np.zeros((n, m))
+    f0 = np.zeros(n)
+    f1 = np.zeros(n)
+    dummyP = np.zeros((n, m))
+    steps_in_contact = np.zeros(ne, dtype=np.int64)
+    dtc = np.full(ne, np.inf)
+    for e in range(ne):
+        if disc[e, 0] != 0.0:
+            dtc[e] = contact_step(e, disc[e, 1], sysa, spc)
+
+    n_stored = 0
+    n_steps = 0
+    n_rej = 0
+    n_rhs = 0
+    n_imp = 0
+    min_spc = 1 << 62
+    n_contacts = 0
+    n_events = 0
+    max_land = 0.0
+    fixed = meth != DP5
+    k_grid = 0  # index of the last grid point reached
+    n_grid = int(math.ceil((t_end - t0) / dt - 1e-9))
+    t = t0
+    h = h_init
+    status = 0
+    en = 1.0
+
+    st = deriv(t, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0, KP[0], fel)
+    n_rhs += 1
+    if st != 0:
+        return st
+    if track_xmax:
+        for i in range(N):
+            xmax[i] = max(xmax[i], abs(s[i]))
+    # store t0
+    if store_every > 0 and out_t.shape[0] > 0:
+        y, yd, ydd, st = excite(t, xc, xp, xtab)
+        out_t[0] = t
+        for q in range(n):
+            out_s[0, q] = s[q]
+        for e in range(ne):
+            out_d[0, e], dd = kinematics(e, s, y, yd, sysa)
+            out_f[0, e] = fel[e]
+        n_stored = 1
+
+    while t < t_end and status == 0:
+        if n_steps >= max_steps:
+            status = ERR_MAX_STEPS
+            break
+        # ---- choose the step
+        tg = t0 + (k_grid + 1) * dt if k_grid + 1 < n_grid else t_end
+        if fixed:
+            hc = np.inf
+            for e in range(ne):
+                if disc[e, 0] != 0.0 and dtc[e] < hc:
+                    hc = dtc[e]
+            hit_grid = True
+            h = tg - t
+            if hc < h:
+                h = hc
+                hit_grid = False
+                if tg - t - h < 1e-9 * h:  # do not leave a sliver before the grid point
+                    h = tg - t
+                    hit_grid = True
+        else:
+            hit_grid = False
+            if h >= t_end - t:
+                h = t_end - t
+            if h < 1e-14 * max(abs(t), 1.0):
+                status = ERR_STEP_UNDERFLOW
+                break
+        # ---- trial step
+        st = rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
+                     s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+        n_rhs += ns - (0 if want_var else 1)
+        if st != 0:
+            status = st
+            break
+        if not fixed:
+            # error norm (RMS), relative to the larger of the two states
+            en = 0.0
+            for q in range(n):
+                sc = atol + rtol * max(abs(s[q]), abs(s_new[q]))
+                en += (err_w[q] / sc) ** 2
+            en = math.sqrt(en / n)
+            if en > 1.0:
+                h = h * max(0.2, 0.9 * en ** -0.2)
+                n_rej += 1
+                n_steps += 1
+                continue
+        if fixed:
+            t_new = tg if hit_grid else t + h
+        else:
+            t_new = t_end if t + h >= t_end else t + h
+        st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
+        n_rhs += 1
+        if st != 0:
+            status = st
+            break
+        # ---- events: the earliest boundary crossed in this step
+        ev = -1
+        tau_ev = h
+        if events_on:
+            y1, yd1, ydd1, st = excite(t_new, xc, xp, xtab)
+            y0, yd0, ydd0, st = excite(t, xc, xp, xtab)
+            ew = sysa[5]
+            for e in range(ne):
+                if not has_event(etype[e]):
+                    continue
+                sign = -1.0 if disc[e, 0] != 0.0 else 1.0
+                d0, dd0 = kinematics(e, s, y0, yd0, sysa)
+                d1, dd1 = kinematics(e, s_new, y1, yd1, sysa)
+                phi0 = sign * d0
+                phi1 = sign * d1
+                hi = -1.0
+                phihi = 0.0
+                if phi1 > 0.0:
+                    hi = h
+                    phihi = phi1
+                elif sign * dd0 > 0.0 and sign * dd1 < 0.0:
+                    # the boundary may be touched between the step ends: find the extremum of
+                    # delta on the quintic dense output, then check it on the step map
+                    wx0 = 0.0
+                    wv0 = 0.0
+                    wa0 = 0.0
+                    wx1 = 0.0
+                    wv1 = 0.0
+                    wa1 = 0.0
+                    for j in range(N):
+                        wx0 += ew[e, j] * s[j]
+                        wv0 += ew[e, j] * s[N + j]
+                        wa0 += ew[e, j] * f0[N + j]
+                        wx1 += ew[e, j] * s_new[j]
+                        wv1 += ew[e, j] * s_new[N + j]
+                        wa1 += ew[e, j] * f1[N + j]
+                    lo_b = 0.0
+                    hi_b = 1.0
+                    for _ in range(50):
+                        th = 0.5 * (lo_b + hi_b)
+                        xw, xwd = hermite5(wx0, wv0, wa0, wx1, wv1, wa1, h, th)
+                        ym, ydm, yddm, st2 = excite(t + th * h, xc, xp, xtab)
+                        if sign * (xwd + sysa[6][e] * ydm) > 0.0:
+                            lo_b = th
+                        else:
+                            hi_b = th
+                    th = 0.5 * (lo_b + hi_b)
+                    xw, xwd = hermite5(wx0, wv0, wa0, wx1, wv1, wa1, h, th)
+                    ym, ydm, yddm, st2 = excite(t + th * h, xc, xp, xtab)
+                    dmh = sign * (xw + sysa[6][e] * ym - sysa[7][e])
+                    if dmh > -1e-3 * max(abs(d0), abs(d1)):
+                        tm = th * h
+                        dm, st = delta_after(meth, t, tm, s, P, dvm, disc, e, sign, sysa, xc, xp,
+                                             xtab, f0, s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w)
+                        if dm > 0.0:
+                            hi = tm
+                            phihi = dm
+                if hi > 0.0:
+                    if phi0 > 0.0:
+                        phi0 = 0.0
+                    tau, st = locate(meth, t, 0.0, hi, phi0, phihi, s, P, dvm, disc, e, sign,
+                                     sysa, xc, xp, xtab, f0, s_try, dummyP, KS, KP, ytmp, Ptmp,
+                                     fel, err_w)
+                    if st != 0:
+                        status = st
+                        break
+                    if ev < 0 or tau < tau_ev:
+                        tau_ev = tau
+                        ev = e
+            if status != 0:
+                break
+        if ev >= 0:
+            # accept the step to the boundary
+            st = rk_step(meth, t, tau_ev, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
+                         s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+            if st != 0:
+                status = st
+                break
+            t_new = t + tau_ev
+            hit_grid = False
+            st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
+            n_rhs += 1
+        # ---- accept
+        n_steps += 1
+        for e in range(ne):
+            if disc[e, 0] != 0.0:
+                steps_in_contact[e] += 1
+        if track_xmax:
+            step_extrema(s, f0, s_new, f1, t_new - t, N, xmax)
+        # dense output onto the grid for DP5
+        if not fixed and store_every > 0:
+            while k_grid < n_grid:
+                kk = k_grid + 1
+                tgk = t0 + kk * dt if kk < n_grid else t_end
+                if tgk > t_new:
+                    break
+                k_grid = kk
+                if kk % store_every == 0 or kk == n_grid:
+                    th = (tgk - t) / (t_new - t)
+                    yk, ydk, yddk, st = excite(tgk, xc, xp, xtab)
+                    out_t[n_stored] = tgk
+                    for i in range(N):
+                        xk, vk = hermite5(s[i], s[N + i], f0[N + i], s_new[i], s_new[N + i],
+                                          f1[N + i], t_new - t, th)
+                        out_s[n_stored, i] = xk
+                        out_s[n_stored, N + i] = vk
+                    for e in range(ne):
+                        dk, ddk = kinematics(e, out_s[n_stored], yk, ydk, sysa)
+                        out_d[n_stored, e] = dk
+                        fk, a1, a2, a3 = element_force(etype[e], sysa[8][e], dk, ddk, disc[e, 1], disc[e, 0])
+                        out_f[n_stored, e] = fk
+                    n_stored += 1
+        t = t_new
+        for q in range(n):
+            s[q] = s_new[q]
+            f0[q] = f1[q]
+        if want_var:
+            for q in range(n):
+                for c in range(m):
+                    P[q, c] = P_new[q, c]
+        # ---- switch the discrete state at an event
+        if ev >= 0:
+            n_events += 1
+            y, yd, ydd, st = excite(t, xc, xp, xtab)
+            d, dd = kinematics(ev, s, y, yd, sysa)
+            if abs(d) > max_land:
+                max_land = abs(d)
+            if disc[ev, 0] == 0.0:
+                disc[ev, 0] = 1.0
+                disc[ev, 1] = dd if dd > 0.0 else 1e-12
+                n_imp += 1
+                steps_in_contact[ev] = 0
+                dtc[ev] = contact_step(ev, disc[ev, 1], sysa, spc)
+                if want_var:
+                    # sensitivity of the onset velocity: d vminus = [0,w] P + delta'' dt_e,
+                    # dt_e = -([w,0] P) / delta'
+                    ew = sysa[5]
+                    dd2 = sysa[6][ev] * ydd
+                    for j in range(N):
+                        dd2 += ew[ev, j] * f0[N + j]
+                    for c in range(m):
+                        wx = 0.0
+                        wv = 0.0
+                        for j in range(N):
+                            wx += ew[ev, j] * P[j, c]
+                            wv += ew[ev, j] * P[N + j, c]
+                        dvm[ev, c] = wv - dd2 * wx / disc[ev, 1]
+            else:
+                disc[ev, 0] = 0.0
+                n_contacts += 1
+                if steps_in_contact[ev] < min_spc:
+                    min_spc = steps_in_contact[ev]
+                dtc[ev] = np.inf
+            # f0 after the switch (the field is continuous; the law's memory changed)
+            st = deriv(t, s, P, dvm, disc, False, sysa, xc, xp, xtab, f0, KP[0], fel)
+            n_rhs += 1
+        # ---- grid bookkeeping (fixed step)
+        if fixed and hit_grid:
+            k_grid += 1
+            if store_every > 0 and (k_grid % store_every == 0 or k_grid == n_grid):
+                y, yd, ydd, st = excite(t, xc, xp, xtab)
+                out_t[n_stored] = t
+                for q in range(n):
+                    out_s[n_stored, q] = s[q]
+                for e in range(ne):
+                    out_d[n_stored, e], dd = kinematics(e, s, y, yd, sysa)
+                    out_f[n_stored, e] = fel[e]
+                n_stored += 1
+            if k_grid >= n_grid:
+                t = t_end
+        if not fixed:
+            # next step size
+            if en == 0.0:
+                fac = 5.0
+            else:
+                fac = min(5.0, max(0.2, 0.9 * en ** -0.2))
+            h = h * fac
+            if ev >= 0:
+                h = min(h, max(1e-3 * dt, 1e-9))
+
+    for q in range(n):
+        s_end[q] = s[q]
+        for c in range(m):
+            P_end[q, c] = P[q, c]
+    for e in range(ne):
+        disc_end[e, 0] = disc[e, 0]
+        disc_end[e, 1] = disc[e, 1]
+        for c in range(m):
+            dvm_end[e, c] = dvm[e, c]
+    counters[0] = n_stored
+    counters[1] = n_steps
+    counters[2] = n_rej
+    counters[3] = n_rhs
+    counters[4] = n_imp
+    counters[5] = min_spc if n_contacts > 0 else -1
+    counters[6] = n_contacts
+    counters[7] = n_events
+    fcounters[0] = t
+    fcounters[1] = max_land
+    return status

@@ -1,0 +1,174 @@
+"""Excitations: what drives a model, as arrays the compiled kernels evaluate.
+
+A base-excited model reads the excitation as the base displacement ``y`` (m) and its
+velocity ``y'`` (m/s); a force-excited model reads ``y`` as the force (N). Every
+excitation reduces to ``kernel_args() -> (code, p, tab)`` so that one set of kernels
+serves them all (see ``docs/INTERNALS.md``).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._validate import finite, positive
+
+HARMONIC = 0
+SAMPLED = 1
+COSINE_SUM = 2
+
+_EMPTY_TAB = np.zeros((1, 3))
+
+
+class Excitation:
+    """Base class. Subclasses implement :meth:`kernel_args` and :meth:`describe`."""
+
+    def kernel_args(self):  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def describe(self) -> dict:
+        """Flat dict of the parameters (for result files)."""
+        return {"kind": type(self).__name__}
+
+    def evaluate(self, t):
+        """Return ``(y, y')`` at the times ``t`` (s), computed by the kernel's own code."""
+        from ._kernels import excitation_many
+
+        code, p, tab = self.kernel_args()
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        out = np.empty((t.size, 2))
+        status = excitation_many(code, p, tab, t, out)
+        if status != 0:
+            raise ValueError("t: outside the time span the excitation is defined on "
+                             f"({self.time_span()})")
+        return out[:, 0], out[:, 1]
+
+    def time_span(self):
+        return (-math.inf, math.inf)
+
+    def max_frequency(self) -> float:
+        """Highest frequency (Hz) in the excitation, used to choose a default step."""
+        return 0.0
+
+
+@dataclass(frozen=True)
+class Harmonic(Excitation):
+    """``y(t) = amplitude * cos(2 pi frequency t + phase)``.
+
+    amplitude: base displacement (m) for base-excited models, force (N) for force-excited ones.
+    frequency: Hz (> 0). phase: rad.
+    """
+
+    amplitude: float
+    frequency: float
+    phase: float = 0.0
+
+    def __post_init__(self):
+        finite("amplitude", self.amplitude)
+        positive("frequency", self.frequency, unit="Hz")
+        finite("phase", self.phase)
+
+    def kernel_args(self):
+        p = np.array([float(self.amplitude), 2.0 * math.pi * float(self.frequency), float(self.phase)])
+        return HARMONIC, p, _EMPTY_TAB
+
+    def describe(self):
+        return {"kind": "Harmonic", "amplitude": float(self.amplitude),
+                "frequency": float(self.frequency), "phase": float(self.phase)}
+
+    def max_frequency(self):
+        return float(self.frequency)
+
+    @property
+    def period(self) -> float:
+        return 1.0 / float(self.frequency)
+
+
+@dataclass(frozen=True, eq=False)
+class Sampled(Excitation):
+    """An excitation tabulated on a uniform grid ``t_start + i h`` (s).
+
+    ``y`` is interpolated by the cubic Hermite polynomial through (y, y') and ``y'`` by the
+    one through (y', y''): both errors are O(h^4). ``ydd`` may be omitted (then ``y'`` is
+    interpolated linearly, O(h^2), which is only adequate for coarse work).
+    Evaluating outside ``[t_start, t_start + (n-1) h]`` is an error.
+    """
+
+    t_start: float
+    h: float
+    y: np.ndarray
+    yd: np.ndarray
+    ydd: np.ndarray | None = None
+    max_freq: float = 0.0
+    tab: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self):
+        finite("t_start", self.t_start)
+        positive("h", self.h, unit="s")
+        y = np.ascontiguousarray(self.y, dtype=float)
+        yd = np.ascontiguousarray(self.yd, dtype=float)
+        if y.ndim != 1 or y.shape != yd.shape or y.size < 2:
+            raise ValueError("y, yd: must be 1-D arrays of equal length >= 2")
+        tab = np.empty((y.size, 3))
+        tab[:, 0] = y
+        tab[:, 1] = yd
+        if self.ydd is None:
+            tab[:, 2] = np.nan  # kernel falls back to linear interpolation of y'
+        else:
+            ydd = np.asarray(self.ydd, dtype=float)
+            if ydd.shape != y.shape:
+                raise ValueError("ydd: must have the shape of y")
+            tab[:, 2] = ydd
+        if not np.all(np.isfinite(tab[:, :2])):
+            raise ValueError("y, yd: must be finite")
+        object.__setattr__(self, "tab", tab)
+
+    def kernel_args(self):
+        p = np.array([float(self.t_start), float(self.h), float(self.tab.shape[0])])
+        return SAMPLED, p, self.tab
+
+    def time_span(self):
+        return (self.t_start, self.t_start + (self.tab.shape[0] - 1) * self.h)
+
+    def describe(self):
+        return {"kind": "Sampled", "t_start": float(self.t_start), "h": float(self.h),
+                "n": int(self.tab.shape[0])}
+
+    def max_frequency(self):
+        return float(self.max_freq) if self.max_freq > 0 else 0.25 / float(self.h)
+
+
+@dataclass(frozen=True, eq=False)
+class CosineSum(Excitation):
+    """``y(t) = sum_k amplitudes[k] cos(2 pi frequencies[k] t + phases[k])``, evaluated directly
+    (O(K) per evaluation; for many components synthesize a :class:`Sampled` table instead).
+    frequencies: Hz (>= 0), amplitudes: m (or N), phases: rad."""
+
+    frequencies: np.ndarray
+    amplitudes: np.ndarray
+    phases: np.ndarray
+    tab: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self):
+        f = np.atleast_1d(np.asarray(self.frequencies, dtype=float))
+        a = np.atleast_1d(np.asarray(self.amplitudes, dtype=float))
+        ph = np.atleast_1d(np.asarray(self.phases, dtype=float))
+        if not (f.shape == a.shape == ph.shape) or f.ndim != 1 or f.size == 0:
+            raise ValueError("frequencies, amplitudes, phases: must be 1-D arrays of one length >= 1")
+        for name, arr in (("frequencies", f), ("amplitudes", a), ("phases", ph)):
+            if not np.all(np.isfinite(arr)):
+                raise ValueError(f"{name}: must be finite")
+        if np.any(f < 0):
+            raise ValueError("frequencies: must be >= 0 Hz")
+        tab = np.column_stack([2.0 * np.pi * f, a, ph])
+        object.__setattr__(self, "tab", np.ascontiguousarray(tab))
+
+    def kernel_args(self):
+        return COSINE_SUM, np.zeros(1), self.tab
+
+    def describe(self):
+        return {"kind": "CosineSum", "n_components": int(self.tab.shape[0])}
+
+    def max_frequency(self):
+        return float(self.tab[:, 0].max() / (2 * np.pi))

@@ -1,0 +1,278 @@
+"""Time integration with exact contact events: ``integrate`` (time histories) and ``flow``
+(the end state of one interval, optionally with its monodromy matrix)."""
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _kernels as _k
+from ._validate import choice, finite, positive
+from .excitation import Excitation
+
+METHODS = {"rk2": _k.RK2, "rk4": _k.RK4, "adaptive": _k.DP5}
+
+# defaults: steps per period of the fastest of (excitation, linear natural frequency), and
+# steps per contact. Accuracy they give on the paper model is stated in the README.
+_STEPS_PER_PERIOD = {"rk2": 400, "rk4": 100, "adaptive": 32}
+_STEPS_PER_CONTACT = {"rk2": 96, "rk4": 32, "adaptive": 32}
+MIN_STEPS_PER_CONTACT = 8
+
+
+class IntegrationError(RuntimeError):
+    """The integrator could not complete; the message says what to change."""
+
+
+def _status_message(status, t, method):
+    if status == _k.ERR_EXCITATION_RANGE:
+        return (f"the excitation is not defined at t = {t:.9g} s: the time span must lie inside "
+                "the span of the sampled excitation (t0, t_end)")
+    if status == _k.ERR_NONFINITE:
+        return (f"the state became non-finite near t = {t:.9g} s with method={method!r}: "
+                "reduce dt (or raise steps_per_contact), or use method='adaptive'")
+    if status == _k.ERR_EVENT:
+        return (f"a contact boundary could not be located near t = {t:.9g} s: reduce dt")
+    if status == _k.ERR_MAX_STEPS:
+        return (f"max_steps reached at t = {t:.9g} s: raise max_steps, loosen rtol, or "
+                "integrate a shorter span")
+    if status == _k.ERR_STEP_UNDERFLOW:
+        return (f"the adaptive step fell below round-off at t = {t:.9g} s: loosen rtol/atol")
+    return f"integration failed with status {status} at t = {t:.9g} s"
+
+
+def default_dt(model, excitation, method="rk4"):
+    """Default step (s): a fixed fraction of the shortest period among the excitation's highest
+    frequency and the linear structure's highest natural frequency (for 'adaptive', the spacing
+    of the output samples)."""
+    f = max(excitation.max_frequency(), float(np.max(model.system.natural_frequencies())), 1e-9)
+    return 1.0 / (_STEPS_PER_PERIOD[method] * f)
+
+
+@dataclass
+class Trajectory:
+    """A time history on a uniform grid.
+
+    t (n,) s; x, v (n, N) m and m/s; delta (n, n_elements) m, penetration (> 0 in contact);
+    force (n, n_elements) N, element forces (>= 0 push out of the stop); n_impacts: contact
+    onsets; state_end (2N,), disc_end (n_elements, 2) [in contact, delta'_minus] at t_end.
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    v: np.ndarray
+    delta: np.ndarray
+    force: np.ndarray
+    n_impacts: int
+    state_end: np.ndarray
+    disc_end: np.ndarray
+    t_end: float
+    method: str
+    dt: float
+    steps_per_contact: float
+    n_steps: int
+    n_rejected: int
+    n_rhs: int
+    min_steps_per_contact: int
+    excitation: Excitation
+    xmax: np.ndarray | None = None
+
+    @property
+    def y(self):
+        """Excitation y at the samples (m for base excitation, N for force)."""
+        return self.excitation.evaluate(self.t)[0]
+
+    @property
+    def yd(self):
+        return self.excitation.evaluate(self.t)[1]
+
+
+@dataclass
+class Flow:
+    """End of one interval: state (2N,), disc (n_elements, 2), xmax (N,) max |x_i| over the
+    interval (refined between steps on the quintic dense output), n_impacts, and with
+    ``monodromy=True`` the matrix d state(t0+T) / d state(t0) (2N, 2N) from the variational
+    equations, plus the sensitivities through the Lankarani-Nikravesh onset velocities."""
+
+    state: np.ndarray
+    disc: np.ndarray
+    xmax: np.ndarray
+    n_impacts: int
+    monodromy: np.ndarray | None
+    dstate_dvminus0: np.ndarray | None
+    dvminus_dstate0: np.ndarray | None
+    dvminus_dvminus0: np.ndarray | None
+    n_steps: int
+    n_rhs: int
+
+
+def _prepare(model, excitation, method, dt, steps_per_contact, t0, t_end):
+    if not hasattr(model, "kernel_arrays"):
+        raise ValueError("model: must be an nlbeam model (BeamImpact, Duffing, System, ...)")
+    if not isinstance(excitation, Excitation):
+        raise ValueError("excitation: must be an nlbeam.Excitation (Harmonic, Sampled, ...)")
+    choice("method", method, tuple(METHODS))
+    finite("t0", t0)
+    finite("t_end", t_end)
+    if not t_end > t0:
+        raise ValueError(f"t_end: must be > t0 = {t0!r} s, got {t_end!r}")
+    if dt is None:
+        dt = default_dt(model, excitation, method)
+    positive("dt", dt, unit="s")
+    if steps_per_contact is None:
+        steps_per_contact = _STEPS_PER_CONTACT[method]
+    positive("steps_per_contact", steps_per_contact)
+    lo, hi = excitation.time_span()
+    tol = 1e-9 * max(abs(t0), abs(t_end), 1.0)
+    if t0 < lo - tol or t_end > hi + tol:
+        raise ValueError(f"t_end: the span [{t0}, {t_end}] s must lie inside the excitation's "
+                         f"span [{lo}, {hi}] s")
+    return float(dt), float(steps_per_contact)
+
+
+def _initial(model, x0, disc0, t0, excitation):
+    N = model.n_dof
+    ne = model.n_elements
+    if x0 is None:
+        s0 = np.zeros(2 * N)
+    else:
+        s0 = np.array(x0, dtype=float).ravel()
+        if s0.shape != (2 * N,) or not np.all(np.isfinite(s0)):
+            raise ValueError(f"x0: must be a finite state [x_1..x_N, v_1..v_N] of length {2 * N}")
+    if disc0 is None:
+        disc = np.zeros((ne, 2))
+        # a record that starts inside contact takes the penetration rate at the start as
+        # delta'_minus when it is positive (else the smallest positive value the law allows)
+        sysa = model.kernel_arrays()
+        y, yd = excitation.evaluate([t0])
+        for e in range(ne):
+            if _k.has_event(sysa[4][e]):
+                d = sysa[5][e] @ s0[:N] + sysa[6][e] * y[0] - sysa[7][e]
+                dd = sysa[5][e] @ s0[N:] + sysa[6][e] * yd[0]
+                if d > 0:
+                    disc[e, 0] = 1.0
+                    disc[e, 1] = dd if dd > 0 else 1e-12
+    else:
+        disc = np.array(disc0, dtype=float).reshape(ne, 2)
+    return s0, disc
+
+
+def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc,
+         events, want_var, P0, dvm0, track_xmax, store_every):
+    sysa = model.kernel_arrays()
+    xc, xp, xtab = excitation.kernel_args()
+    N = model.n_dof
+    ne = model.n_elements
+    n_grid = int(math.ceil((t_end - t0) / dt - 1e-9))
+    if store_every > 0:
+        n_out = n_grid // store_every + 2
+    else:
+        n_out = 0
+    out_t = np.empty(n_out)
+    out_s = np.empty((n_out, 2 * N))
+    out_d = np.empty((n_out, ne))
+    out_f = np.empty((n_out, ne))
+    s_end = np.empty(2 * N)
+    disc_end = np.empty((ne, 2))
+    P_end = np.empty_like(P0)
+    dvm_end = np.empty_like(dvm0)
+    xmax = np.zeros(N)
+    counters = np.zeros(8, dtype=np.int64)
+    fcounters = np.zeros(2)
+    h_init = min(dt, 1e-3 / max(excitation.max_frequency(), 1.0))
+    status = _k.integrate_kernel(sysa, xc, xp, xtab, METHODS[method], float(t0), float(t_end),
+                                 dt, spc, float(rtol), float(atol), h_init, int(max_steps),
+                                 s0, disc, bool(events), bool(want_var), P0, dvm0,
+                                 bool(track_xmax), int(store_every), out_t, out_s, out_d, out_f,
+                                 s_end, disc_end, P_end, dvm_end, xmax, counters, fcounters)
+    if status != 0:
+        raise IntegrationError(_status_message(status, fcounters[0], method))
+    n = counters[0]
+    if counters[6] > 0 and method != "adaptive" and counters[5] < MIN_STEPS_PER_CONTACT:
+        warnings.warn(f"a contact was resolved with only {counters[5]} steps (< "
+                      f"{MIN_STEPS_PER_CONTACT}): the result is inaccurate; reduce dt or raise "
+                      "steps_per_contact", RuntimeWarning, stacklevel=3)
+    return (out_t[:n], out_s[:n], out_d[:n], out_f[:n], s_end, disc_end, P_end, dvm_end,
+            xmax, counters, fcounters)
+
+
+def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.0,
+              disc0=None, store_every=1, steps_per_contact=None, rtol=1e-8, atol=1e-12,
+              events=True, max_steps=100_000_000):
+    """Integrate ``model`` driven by ``excitation`` from t0 to t_end (s).
+
+    method: 'rk2' (the paper's constant-step scheme, Heun), 'rk4', both with step ``dt`` (s)
+    outside contact and (estimated contact duration)/steps_per_contact inside, or 'adaptive'
+    (Dormand-Prince 5(4) with tolerances rtol, atol and quintic Hermite dense output; ``dt`` is
+    then the output spacing). Every contact onset and end is located to a few ulps of t and
+    stepped onto; no step crosses a contact boundary (``events=False`` switches this off, for
+    comparison only). x0: initial state [x_1..x_N, v_1..v_N] (default: at rest).
+    store_every: keep every k-th grid sample (0: none, only the end state).
+    Returns a :class:`Trajectory`.
+    """
+    dt, spc = _prepare(model, excitation, method, dt, steps_per_contact, t0, t_end)
+    if method == "adaptive":
+        positive("rtol", rtol)
+        positive("atol", atol)
+    if int(store_every) < 0:
+        raise ValueError(f"store_every: must be an integer >= 0, got {store_every!r}")
+    s0, disc = _initial(model, x0, disc0, t0, excitation)
+    N = model.n_dof
+    ne = model.n_elements
+    P0 = np.zeros((2 * N, 1))
+    dvm0 = np.zeros((ne, 1))
+    (t, S, D, F, s_end, disc_end, _, _, xmax, c, fc) = _run(
+        model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc, events,
+        False, P0, dvm0, True, store_every)
+    return Trajectory(t=t, x=S[:, :N], v=S[:, N:], delta=D, force=F, n_impacts=int(c[4]),
+                      state_end=s_end, disc_end=disc_end, t_end=float(t_end), method=method,
+                      dt=dt, steps_per_contact=spc, n_steps=int(c[1]), n_rejected=int(c[2]),
+                      n_rhs=int(c[3]), min_steps_per_contact=int(c[5]), excitation=excitation,
+                      xmax=xmax)
+
+
+def flow(model, excitation, state0, t0, duration, *, monodromy=False, disc0=None,
+         method="rk4", dt=None, steps_per_contact=None, rtol=1e-10, atol=1e-14, events=True,
+         max_steps=100_000_000):
+    """The state at t0 + duration (s) from ``state0`` at t0, with ``xmax`` over the interval.
+
+    With ``monodromy=True`` the variational equations are integrated alongside with the same
+    Runge-Kutta stages (the exact derivative of the fixed-step map between events), and the
+    Lankarani-Nikravesh onset velocity carries its own sensitivity row, updated at every onset.
+    For a fixed-step method, dt is adjusted down so that duration / dt is an integer.
+    """
+    finite("duration", duration)
+    if not duration > 0:
+        raise ValueError(f"duration: must be > 0 s, got {duration!r}")
+    t_end = t0 + duration
+    dt, spc = _prepare(model, excitation, method, dt, steps_per_contact, t0, t_end)
+    if method != "adaptive":
+        dt = duration / math.ceil(duration / dt - 1e-9)
+    s0, disc = _initial(model, state0, disc0, t0, excitation)
+    N = model.n_dof
+    ne = model.n_elements
+    in_contact = bool(np.any(disc[:, 0] != 0))
+    if monodromy:
+        m = 2 * N + (ne if in_contact else 0)
+        P0 = np.zeros((2 * N, m))
+        P0[:, :2 * N] = np.eye(2 * N)
+        dvm0 = np.zeros((ne, m))
+        if in_contact:
+            dvm0[:, 2 * N:] = np.eye(ne)
+    else:
+        P0 = np.zeros((2 * N, 1))
+        dvm0 = np.zeros((ne, 1))
+    (_, _, _, _, s_end, disc_end, P, dvm, xmax, c, fc) = _run(
+        model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc, events,
+        monodromy, P0, dvm0, True, 0)
+    if monodromy:
+        M = P[:, :2 * N].copy()
+        dS_dv = P[:, 2 * N:].copy() if in_contact else None
+        dv_dS = dvm[:, :2 * N].copy()
+        dv_dv = dvm[:, 2 * N:].copy() if in_contact else None
+    else:
+        M = dS_dv = dv_dS = dv_dv = None
+    return Flow(state=s_end, disc=disc_end, xmax=xmax, n_impacts=int(c[4]), monodromy=M,
+                dstate_dvminus0=dS_dv, dvminus_dstate0=dv_dS, dvminus_dvminus0=dv_dv,
+                n_steps=int(c[1]), n_rhs=int(c[3]))

@@ -1,0 +1,8 @@
+"""Stochastic dynamics: Gaussian excitations synthesized block by block, streaming
+estimators (Welch PSD, histogram PDF, moments) and the simulation loop.
+
+Importing this package loads neither matplotlib nor h5py.
+"""
+from .noise import BandLimitedNoise, Realization, Recorded, SpectralNoise, hermite_step
+
+__all__ = ["BandLimitedNoise", "SpectralNoise", "Realization", "Recorded", "hermite_step"]

@@ -1,0 +1,180 @@
+"""Compiled kernels of the stochastic package.
+
+Every kernel takes arrays, writes into preallocated ``out`` arrays and returns an integer
+status (0 = ok, 1 = a non-finite sample was met). No random numbers, no error handling
+beyond the status: the Python wrappers validate and turn status codes into messages.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+OK = 0
+NON_FINITE = 1
+
+_CHUNK = 256  # partial sums over chunks of this length keep summation error ~ (256 + n/256) eps
+
+
+@njit(cache=True)
+def block_moments(x, out):
+    """Central moment sums of ``x``: out = [n, mean, M2, M3, M4], M_p = sum (x - mean)^p.
+
+    Two passes: a provisional mean m0, then power sums of d = x - m0 (exact subtractions
+    when x is near m0), shifted to the corrected mean. Stable for |mean| >> std.
+    """
+    n = x.size
+    out[0] = n
+    if n == 0:
+        out[1] = 0.0
+        out[2] = 0.0
+        out[3] = 0.0
+        out[4] = 0.0
+        return OK
+    total = 0.0
+    i = 0
+    while i < n:
+        part = 0.0
+        j_end = min(i + _CHUNK, n)
+        for j in range(i, j_end):
+            v = x[j]
+            if not math.isfinite(v):
+                return NON_FINITE
+            part += v
+        total += part
+        i = j_end
+    m0 = total / n
+    s1 = 0.0
+    s2 = 0.0
+    s3 = 0.0
+    s4 = 0.0
+    i = 0
+    while i < n:
+        p1 = 0.0
+        p2 = 0.0
+        p3 = 0.0
+        p4 = 0.0
+        j_end = min(i + _CHUNK, n)
+        for j in range(i, j_end):
+            d = x[j] - m0
+            d2 = d * d
+            p1 += d
+            p2 += d2
+            p3 += d2 * d
+            p4 += d2 * d2
+        s1 += p1
+        s2 += p2
+        s3 += p3
+        s4 += p4
+        i = j_end
+    dl = s1 / n
+    out[1] = m0 + dl
+    m2 = s2 - n * dl * dl
+    if m2 < 0.0:
+        m2 = 0.0
+    out[2] = m2
+    out[3] = s3 - 3.0 * dl * s2 + 2.0 * n * dl * dl * dl
+    out[4] = s4 - 4.0 * dl * s3 + 6.0 * dl * dl * s2 - 3.0 * n * dl * dl * dl * dl
+    return OK
+
+
+@njit(cache=True)
+def histogram_fixed(x, origin, width, i_lo, counts, outside):
+    """Count ``x`` into bins ``[origin + (i_lo + b) width, origin + (i_lo + b + 1) width)``.
+
+    ``counts`` (n_bins,) and ``outside`` ([below, above]) are incremented in place. The
+    last bin is closed on the right (numpy convention). Edges are computed as
+    ``origin + i * width`` and every index is corrected against them, so a sample on an
+    edge lands in the bin np.histogram would give it.
+    """
+    nb = counts.size
+    for j in range(x.size):
+        v = x[j]
+        if not math.isfinite(v):
+            return NON_FINITE
+        k = int(math.floor((v - origin) / width)) - i_lo
+        # correct rounding of the division against the edges themselves
+        if k >= 0 and k <= nb:
+            e_lo = origin + (i_lo + k) * width
+            if v < e_lo:
+                k -= 1
+            elif k < nb:
+                e_hi = origin + (i_lo + k + 1) * width
+                if v >= e_hi:
+                    k += 1
+        elif k == -1:
+            e_hi = origin + i_lo * width
+            if v >= e_hi:
+                k = 0
+        if k == nb:
+            e_top = origin + (i_lo + nb) * width
+            if v == e_top:
+                k = nb - 1
+        if k < 0:
+            outside[0] += 1
+        elif k >= nb:
+            outside[1] += 1
+        else:
+            counts[k] += 1
+    return OK
+
+
+@njit(cache=True)
+def histogram_edges(x, edges, counts, outside):
+    """Count ``x`` into arbitrary increasing ``edges`` (last bin closed); binary search."""
+    nb = counts.size
+    lo = edges[0]
+    hi = edges[nb]
+    for j in range(x.size):
+        v = x[j]
+        if not math.isfinite(v):
+            return NON_FINITE
+        if v < lo:
+            outside[0] += 1
+        elif v > hi:
+            outside[1] += 1
+        elif v == hi:
+            counts[nb - 1] += 1
+        else:
+            a = 0
+            b = nb
+            while b - a > 1:
+                m = (a + b) // 2
+                if v >= edges[m]:
+                    a = m
+                else:
+                    b = m
+            counts[a] += 1
+    return OK
+
+
+@njit(cache=True)
+def cosine_sum_grid(t0, h, omega, amp, phase, y, yd, ydd):
+    """Direct sum y = sum a cos(w t + phi) and its two derivatives at t0 + j h (O(K n))."""
+    n = y.size
+    for j in range(n):
+        t = t0 + j * h
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        for k in range(omega.size):
+            arg = omega[k] * t + phase[k]
+            c = math.cos(arg)
+            s = math.sin(arg)
+            s0 += amp[k] * c
+            s1 -= amp[k] * omega[k] * s
+            s2 -= amp[k] * omega[k] * omega[k] * c
+        y[j] = s0
+        yd[j] = s1
+        ydd[j] = s2
+    return OK
+
+
+@njit(cache=True)
+def all_finite(x):
+    """Index of the first non-finite entry of ``x``, or -1."""
+    for j in range(x.size):
+        if not math.isfinite(x[j]):
+            return j
+    return -1

@@ -1,0 +1,615 @@
+"""Gaussian base-motion excitations synthesized block by block (spectral representation).
+
+Units: time s, frequency Hz, displacement m, one-sided PSD m^2/Hz.
+
+Method (Shinozuka's spectral representation, computed by FFT)
+-------------------------------------------------------------
+The record is cut into blocks ``[i B, (i+1) B]`` (``B = block_duration``). Block ``i`` uses
+its own independent realization
+
+    z_i(tau) = sum_k sqrt(2 G(f_k) df) cos(2 pi f_k tau + phi_k),  tau = t - i B,
+    f_k = f_lo + (k + u_i) df,  k = 0 .. ceil((f_hi - f_lo)/df) - 1,
+
+with ``phi_k ~ U[0, 2 pi)`` and a random line offset ``u_i ~ U[0, 1)`` drawn from the block's
+own child seed (``SeedSequence(seed, spawn_key=(i,))``), so any block can be regenerated
+alone. ``G`` is zero outside the band. Averaged over ``u_i`` the lines cover every cell
+``[f_lo + k df, f_lo + (k+1) df)`` uniformly, so the expected PSD of ``z_i`` equals ``G(f)``
+at every frequency (not only at the lines) and its variance equals the integral of ``G``
+over the band; ``z_i`` never repeats within its span (its envelope period ``1/df`` exceeds
+``B + L``). ``z_i`` is evaluated on the grid ``tau_j = j h`` by one complex FFT,
+``z = Re[exp(2 pi i (f_lo + u df) tau) * N ifft(c)]``, together with ``z'`` and ``z''``.
+
+Consecutive realizations are joined over the first ``L = fade_duration`` seconds of each
+block by the power-complementary pair ``w_in = sin(pi/2 g(s))``, ``w_out = cos(pi/2 g(s))``,
+``s = (t - i B)/L``, ``g(s) = s^3 (10 - 15 s + 6 s^2)``: ``w_in^2 + w_out^2 = 1`` keeps the
+variance exactly ``var y = int G``, and ``g' = g'' = 0`` at both ends make ``y, y', y''``
+continuous across joins; ``y' = w' z + w z'`` and ``y'' = w'' z + 2 w' z' + w z''`` are
+exact (product rule). Across a join the covariance at lag tau is
+``R(tau) cos(theta(t) - theta(t + tau))`` instead of ``R(tau)``; averaged over a block this
+smooths the PSD by a kernel of width ~ 1/B Hz (band edges only; a flat band interior is
+unchanged).
+
+Grid step and interpolation accuracy
+------------------------------------
+``nlbeam.Sampled`` interpolates y by the cubic Hermite polynomial through (y, y') and y'
+by the one through (y', y''); the error is at most ``h^4/384 max|y''''|``. For a signal
+band-limited to ``f_max``, Bernstein's inequality gives ``max|y''''| <= (2 pi f_max)^4
+max|y|``, hence
+
+    |y_interp - y| <= (2 pi f_max h)^4 / 384 * max|y|   (and the same bound for y',
+    relative to 2 pi f_max max|y|).
+
+The default ``h`` makes this bound ``interp_tol = 1e-10``:
+``h = (384 interp_tol)^(1/4) / (2 pi f_max) ~ 0.00223 / f_max``. The cross-fade windows
+widen the band by ~ 1/L Hz, a relative change of the bound of order 1/(L f_max).
+"""
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+
+import numpy as np
+import scipy.fft
+
+from nlbeam._validate import finite, positive
+from nlbeam.excitation import CosineSum, Excitation, Sampled
+
+from . import _kernels
+
+__all__ = ["BandLimitedNoise", "SpectralNoise", "Realization", "Recorded", "hermite_step"]
+
+_DEFAULT_INTERP_TOL = 1e-10
+_DEFAULT_BLOCK_SAMPLES = 2 ** 18
+_MAX_TABLE_SAMPLES = 50_000_000
+
+
+def hermite_step(f_max, interp_tol=_DEFAULT_INTERP_TOL):
+    """Grid step h (s) at which cubic Hermite interpolation of a signal band-limited to
+    ``f_max`` (Hz) errs by at most ``interp_tol * max|y|``: (2 pi f_max h)^4/384 = interp_tol."""
+    positive("f_max", f_max, unit="Hz")
+    positive("interp_tol", interp_tol)
+    return (384.0 * interp_tol) ** 0.25 / (2.0 * math.pi * f_max)
+
+
+def _seed_entropy(seed):
+    if seed is None:
+        return int(np.random.SeedSequence().entropy)
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)):
+        raise ValueError(f"seed: must be a non-negative integer or None, got {seed!r}")
+    if seed < 0:
+        raise ValueError(f"seed: must be a non-negative integer or None, got {seed!r}")
+    return int(seed)
+
+
+def _check_band(band):
+    try:
+        lo, hi = band
+    except (TypeError, ValueError):
+        raise ValueError(f"band: must be a pair (f_lo, f_hi) in Hz with 0 <= f_lo < f_hi, got {band!r}") from None
+    lo = finite("band", lo)
+    hi = finite("band", hi)
+    if lo < 0 or not hi > lo:
+        raise ValueError(f"band: must satisfy 0 <= f_lo < f_hi (Hz), got ({lo!r}, {hi!r})")
+    return lo, hi
+
+
+def _int64_or_str(v):
+    return int(v) if v < 2 ** 63 else str(v)
+
+
+class _BlockNoise(Excitation):
+    """Common machinery: block grid, seeds, FFT synthesis, cross-fades. Subclasses provide
+    ``_G(f)`` (target one-sided PSD on the band, vectorized, m^2/Hz) and ``variance``."""
+
+    def _setup(self, band, seed, duration, h, block_duration, fade_duration, interp_tol):
+        self.band = _check_band(band)
+        self.seed = _seed_entropy(seed)
+        if duration is not None:
+            duration = positive("duration", duration, unit="s")
+        self.duration = duration
+        self.interp_tol = positive("interp_tol", interp_tol)
+        if h is None:
+            h = hermite_step(self.band[1], self.interp_tol)
+        else:
+            h = positive("h", h, unit="s")
+            if self.band[1] * h >= 0.5:
+                raise ValueError(f"h: must be < 1/(2 f_hi) = {0.5 / self.band[1]:.6g} s "
+                                 f"for the band {self.band} Hz, got {h!r}")
+        self.h = float(h)
+        if block_duration is None:
+            nb = _DEFAULT_BLOCK_SAMPLES
+        else:
+            block_duration = positive("block_duration", block_duration, unit="s")
+            nb = int(round(block_duration / self.h))
+            if nb < 16:
+                raise ValueError(f"block_duration: must be >= 16 h = {16 * self.h:.6g} s, got {block_duration!r}")
+        self.n_block = nb
+        if fade_duration is None:
+            nf = nb // 2
+        else:
+            fade_duration = positive("fade_duration", fade_duration, unit="s")
+            nf = int(round(fade_duration / self.h))
+            if not 2 <= nf <= nb:
+                raise ValueError(f"fade_duration: must lie in [2 h, block_duration] = "
+                                 f"[{2 * self.h:.6g}, {nb * self.h:.6g}] s, got {fade_duration!r}")
+        self.n_fade = nf
+        # one realization spans n_block + n_fade steps; FFT length N with N h = 1/df > span
+        self.n_fft = scipy.fft.next_fast_len(nb + nf + 2)
+        self.df = 1.0 / (self.n_fft * self.h)
+        self.n_lines = int(math.ceil((self.band[1] - self.band[0]) / self.df))
+        self._cache = OrderedDict()
+
+    # -- public description ------------------------------------------------------------
+    @property
+    def block_duration(self) -> float:
+        """Duration B (s) of one block (n_block steps of h)."""
+        return self.n_block * self.h
+
+    @property
+    def fade_duration(self) -> float:
+        """Duration L (s) of the cross-fade at the start of every block after the first."""
+        return self.n_fade * self.h
+
+    @property
+    def rms(self) -> float:
+        """Target rms (m) = sqrt(variance)."""
+        return math.sqrt(self.variance)
+
+    def psd(self, f):
+        """Target one-sided PSD G(f) (m^2/Hz) at the frequencies ``f`` (Hz); 0 outside the band."""
+        f = np.asarray(f, dtype=float)
+        out = np.zeros(f.shape)
+        inside = (f >= self.band[0]) & (f <= self.band[1])
+        if np.any(inside):
+            out[inside] = self._G(f[inside])
+        return out
+
+    def max_frequency(self) -> float:
+        return float(self.band[1])
+
+    def check_band_vs_step(self, dt):
+        """Raise ValueError unless the band lies below the Nyquist frequency 1/(2 dt) of a
+        sampling/integration step ``dt`` (s)."""
+        dt = positive("dt", dt, unit="s")
+        nyq = 0.5 / dt
+        if not self.band[1] < nyq:
+            raise ValueError(f"dt: step {dt:.6g} s has Nyquist frequency {nyq:.6g} Hz, not above "
+                             f"the band's upper edge {self.band[1]:.6g} Hz; use dt < {0.5 / self.band[1]:.6g} s "
+                             f"or lower band")
+
+    def describe(self) -> dict:
+        return {"kind": type(self).__name__, "band_lo": float(self.band[0]),
+                "band_hi": float(self.band[1]), "rms": float(self.rms),
+                "variance": float(self.variance), "seed": _int64_or_str(self.seed),
+                "duration": float(self.duration) if self.duration is not None else "none",
+                "h": self.h, "block_duration": self.block_duration,
+                "fade_duration": self.fade_duration, "df_lines": self.df,
+                "interp_tol": self.interp_tol, "method": "spectral-representation blocks, FFT, "
+                "random line offset, sin/cos cross-fades"}
+
+    # -- synthesis ------------------------------------------------------------------------
+    def components(self, i):
+        """The realization z_i of block ``i``: dict with ``frequencies`` (Hz), ``amplitudes``
+        (m), ``phases`` (rad) referred to the local time ``tau = t - t_ref``, and ``t_ref`` (s)."""
+        i = self._block_index(i)
+        rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(i,)))
+        u = rng.random()
+        phases = 2.0 * math.pi * rng.random(self.n_lines)
+        f = self.band[0] + (np.arange(self.n_lines) + u) * self.df
+        g = self.psd(f)
+        g[f >= self.band[1]] = 0.0
+        if not np.all(np.isfinite(g)) or np.any(g < 0):
+            bad = f[~(np.isfinite(g) & (g >= 0))][0]
+            raise ValueError(f"psd: must be finite and >= 0 on the band, got {self.psd(bad)!r} at {bad!r} Hz")
+        amps = np.sqrt(2.0 * g * self.df)
+        return {"frequencies": f, "amplitudes": amps, "phases": phases,
+                "t_ref": i * self.block_duration, "offset": u}
+
+    def _block_index(self, i):
+        if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)) or i < 0:
+            raise ValueError(f"i: block index must be an integer >= 0, got {i!r}")
+        return int(i)
+
+    def _realization(self, i):
+        """z_i, z_i', z_i'' on tau_j = j h, j = 0 .. n_block + n_fade (cached, 3 entries)."""
+        if i in self._cache:
+            self._cache.move_to_end(i)
+            return self._cache[i]
+        comp = self.components(i)
+        f, a, ph, u = comp["frequencies"], comp["amplitudes"], comp["phases"], comp["offset"]
+        n = self.n_fft
+        m = self.n_block + self.n_fade + 1
+        c = np.zeros((3, n), dtype=complex)
+        ck = a * np.exp(1j * ph)
+        w = 2.0 * math.pi * f
+        c[0, : f.size] = ck
+        c[1, : f.size] = ck * (1j * w)
+        c[2, : f.size] = ck * (-w * w)
+        s = scipy.fft.ifft(c, axis=1, overwrite_x=True)[:, :m] * n
+        fc = self.band[0] + u * self.df
+        # carrier phase in cycles, reduced mod 1 before multiplying by 2 pi
+        cyc = np.mod(fc * self.h * np.arange(m), 1.0)
+        carrier = np.exp(2j * math.pi * cyc)
+        z = (s * carrier).real
+        self._cache[i] = z
+        while len(self._cache) > 3:
+            self._cache.popitem(last=False)
+        return z
+
+    def _fade(self):
+        nf = self.n_fade
+        L = self.fade_duration
+        s = np.arange(nf + 1) / nf
+        g = s ** 3 * (10.0 - 15.0 * s + 6.0 * s * s)
+        g1 = 30.0 * s * s * (1.0 - s) ** 2 / L
+        g2 = 60.0 * s * (1.0 - s) * (1.0 - 2.0 * s) / (L * L)
+        th = 0.5 * math.pi * g
+        th1 = 0.5 * math.pi * g1
+        th2 = 0.5 * math.pi * g2
+        sn, cs = np.sin(th), np.cos(th)
+        win = (sn, cs * th1, -sn * th1 * th1 + cs * th2)
+        wout = (cs, -sn * th1, -cs * th1 * th1 - sn * th2)
+        return win, wout
+
+    def block_arrays(self, i):
+        """(t_start, y, y', y'') of block ``i`` on ``t_start + j h``, j = 0 .. n_block (s, m, m/s, m/s^2)."""
+        i = self._block_index(i)
+        nb, nf = self.n_block, self.n_fade
+        z = self._realization(i)
+        y = z[:, : nb + 1].copy()
+        if i > 0:
+            zp = self._realization(i - 1)[:, nb: nb + nf + 1]
+            zi = z[:, : nf + 1]
+            win, wout = self._fade()
+            (w0, w1, w2), (v0, v1, v2) = win, wout
+            y[0, : nf + 1] = w0 * zi[0] + v0 * zp[0]
+            y[1, : nf + 1] = w1 * zi[0] + w0 * zi[1] + v1 * zp[0] + v0 * zp[1]
+            y[2, : nf + 1] = (w2 * zi[0] + 2.0 * w1 * zi[1] + w0 * zi[2]
+                              + v2 * zp[0] + 2.0 * v1 * zp[1] + v0 * zp[2])
+        return i * self.block_duration, y[0], y[1], y[2]
+
+    def block(self, i) -> Sampled:
+        """Block ``i`` as ``nlbeam.Sampled`` on [i B, (i+1) B] (s)."""
+        t0, y, yd, ydd = self.block_arrays(i)
+        return Sampled(t0, self.h, y, yd, ydd, max_freq=float(self.band[1]))
+
+    def blocks(self, t_start=0.0, t_end=None, block_duration=None):
+        """Yield ``nlbeam.Sampled`` tables covering [t_start, t_end] (s) block by block.
+
+        Consecutive tables share their boundary node; the first and last are trimmed to the
+        grid nodes enclosing the span. ``block_duration`` must be None or equal to the
+        noise's own (it is fixed when the noise is made, since it determines the numbers).
+        Memory: one block (plus two cached realizations), whatever the span."""
+        if block_duration is not None and abs(float(block_duration) - self.block_duration) > 0.5 * self.h:
+            raise ValueError(f"block_duration: the noise was made with block_duration="
+                             f"{self.block_duration!r} s; pass that or None, got {block_duration!r}")
+        t_start, t_end = self._span(t_start, t_end)
+        B = self.block_duration
+        i0 = int(math.floor(t_start / B))
+        i1 = max(i0, int(math.ceil(t_end / B)) - 1)
+        for i in range(i0, i1 + 1):
+            tb, y, yd, ydd = self.block_arrays(i)
+            ja = 0
+            jb = self.n_block
+            if i == i0:
+                ja = min(max(int(math.floor((t_start - tb) / self.h + 1e-9)), 0), jb - 1)
+            if i == i1:
+                jb = max(min(int(math.ceil((t_end - tb) / self.h - 1e-9)), jb), ja + 1)
+            yield Sampled(tb + ja * self.h, self.h, y[ja: jb + 1], yd[ja: jb + 1],
+                          ydd[ja: jb + 1], max_freq=float(self.band[1]))
+
+    def _span(self, t_start, t_end):
+        t_start = finite("t_start", t_start)
+        if t_start < 0:
+            raise ValueError(f"t_start: must be >= 0 s (the noise starts at t = 0), got {t_start!r}")
+        if t_end is None:
+            if self.duration is None:
+                raise ValueError("t_end: required when the noise has no duration")
+            t_end = self.duration
+        t_end = finite("t_end", t_end)
+        if not t_end > t_start:
+            raise ValueError(f"t_end: must be > t_start = {t_start!r} s, got {t_end!r}")
+        return t_start, t_end
+
+    def sampled(self, t_end=None, t_start=0.0) -> Sampled:
+        """One ``nlbeam.Sampled`` covering [t_start, t_end] (s); memory grows with the span,
+        so use :meth:`blocks` for long records."""
+        t_start, t_end = self._span(t_start, t_end)
+        n = (t_end - t_start) / self.h
+        if n > _MAX_TABLE_SAMPLES:
+            raise ValueError(f"t_end: a single table of {n:.3g} samples is too large; iterate "
+                             f"noise.blocks() or use stochastic.simulate")
+        parts = list(self.blocks(t_start, t_end))
+        t0 = parts[0].t_start
+        tab = np.concatenate([parts[0].tab] + [p.tab[1:] for p in parts[1:]])
+        return Sampled(t0, self.h, tab[:, 0], tab[:, 1], tab[:, 2], max_freq=float(self.band[1]))
+
+    def kernel_args(self):
+        """Kernel arrays of ``sampled(duration)`` (built once), so that a noise with a
+        ``duration`` can be passed to ``nlbeam.integrate`` directly."""
+        if "_table" not in self.__dict__:
+            if self.duration is None:
+                raise ValueError("duration: a noise without duration cannot be integrated as one "
+                                 "table; give duration= or use stochastic.simulate")
+            self._table = self.sampled(self.duration)
+        return self._table.kernel_args()
+
+    def time_span(self):
+        return (0.0, self.duration) if self.duration is not None else (0.0, math.inf)
+
+    def __repr__(self):
+        d = self.describe()
+        keys = ("band_lo", "band_hi", "rms", "seed")
+        return f"{type(self).__name__}(" + ", ".join(f"{k}={d[k]!r}" for k in keys) + ")"
+
+
+class SpectralNoise(_BlockNoise):
+    """Zero-mean Gaussian noise with any one-sided PSD on a band.
+
+    psd: callable ``f (Hz, array) -> G (m^2/Hz)``, or a table ``(f, G)`` interpolated
+    linearly (it must cover the band). band: ``(f_lo, f_hi)`` Hz, ``0 <= f_lo < f_hi``.
+    rms: if given (m), the PSD is rescaled so that the variance is ``rms^2``.
+    seed: non-negative int (None draws one, reported by ``describe()``).
+    duration: record length (s) used by default by ``sampled``/``blocks``/``simulate``.
+    h, block_duration, fade_duration, interp_tol: synthesis grid (see the module doc).
+    """
+
+    def __init__(self, psd, band, *, rms=None, seed=None, duration=None, h=None,
+                 block_duration=None, fade_duration=None, interp_tol=_DEFAULT_INTERP_TOL):
+        self._setup(band, seed, duration, h, block_duration, fade_duration, interp_tol)
+        lo, hi = self.band
+        if callable(psd):
+            self._table_f = None
+            self._fn = psd
+            from scipy.integrate import quad
+
+            val, err = quad(lambda f: float(np.asarray(self._fn(np.array([f])), float).ravel()[0]),
+                            lo, hi, limit=500)
+            probe = np.linspace(lo, hi, 1001)
+            g = np.asarray(psd(probe), dtype=float)
+            if g.shape != probe.shape:
+                g = np.broadcast_to(g, probe.shape)
+            if not np.all(np.isfinite(g)) or np.any(g < 0):
+                raise ValueError("psd: must return finite values >= 0 (m^2/Hz) on the band")
+            raw_var = val
+        else:
+            try:
+                f_tab, g_tab = (np.asarray(a, dtype=float) for a in psd)
+            except (TypeError, ValueError):
+                raise ValueError("psd: must be a callable f -> G or a table (f, G)") from None
+            if f_tab.ndim != 1 or f_tab.shape != g_tab.shape or f_tab.size < 2:
+                raise ValueError("psd: table (f, G) must be two 1-D arrays of one length >= 2")
+            if not (np.all(np.isfinite(f_tab)) and np.all(np.isfinite(g_tab))):
+                raise ValueError("psd: table (f, G) must be finite")
+            if np.any(np.diff(f_tab) <= 0):
+                raise ValueError("psd: table frequencies must be strictly increasing")
+            if np.any(g_tab < 0):
+                raise ValueError("psd: table values G must be >= 0 m^2/Hz")
+            if f_tab[0] > lo or f_tab[-1] < hi:
+                raise ValueError(f"psd: table covers [{f_tab[0]}, {f_tab[-1]}] Hz, must cover band {self.band}")
+            self._table_f = (f_tab, g_tab)
+            self._fn = None
+            inner = f_tab[(f_tab > lo) & (f_tab < hi)]
+            knots = np.concatenate([[lo], inner, [hi]])
+            raw_var = float(np.trapezoid(np.interp(knots, f_tab, g_tab), knots))  # exact for linear G
+        if not raw_var > 0:
+            raise ValueError("psd: must have a positive integral over the band")
+        if rms is not None:
+            rms = positive("rms", rms, unit="m")
+            self._scale = rms * rms / raw_var
+        else:
+            self._scale = 1.0
+        self._rms_given = rms
+        self.variance = raw_var * self._scale
+
+    def _G(self, f):
+        if self._fn is not None:
+            g = np.asarray(self._fn(f), dtype=float)
+            if g.shape != f.shape:
+                g = np.broadcast_to(g, f.shape).copy()
+        else:
+            g = np.interp(f, *self._table_f)
+        return self._scale * g
+
+    def describe(self):
+        d = super().describe()
+        d["psd_source"] = "callable" if self._fn is not None else "table"
+        d["rms_given"] = float(self._rms_given) if self._rms_given is not None else "none"
+        return d
+
+
+class BandLimitedNoise(_BlockNoise):
+    """Zero-mean Gaussian noise, one-sided PSD flat on ``band``, optionally seen through a
+    first-order low-pass: ``G(f) = psd_level / (1 + (f/lowpass)^2)`` for f in the band.
+
+    band: ``(f_lo, f_hi)`` Hz, ``0 <= f_lo < f_hi``. Exactly one of ``rms`` (m, of the
+    filtered signal) or ``psd_level`` (m^2/Hz, the flat level before the filter).
+    lowpass: corner frequency (Hz) or None. seed: non-negative int (None draws one).
+    duration: record length (s). h, block_duration, fade_duration, interp_tol: see module doc.
+    """
+
+    def __init__(self, band, rms=None, psd_level=None, seed=None, lowpass=None, duration=None, *,
+                 h=None, block_duration=None, fade_duration=None, interp_tol=_DEFAULT_INTERP_TOL):
+        self._setup(band, seed, duration, h, block_duration, fade_duration, interp_tol)
+        lo, hi = self.band
+        if (rms is None) == (psd_level is None):
+            raise ValueError("rms, psd_level: give exactly one of rms (m) or psd_level (m^2/Hz)")
+        if lowpass is not None:
+            lowpass = positive("lowpass", lowpass, unit="Hz")
+            bw = lowpass * (math.atan(hi / lowpass) - math.atan(lo / lowpass))
+        else:
+            bw = hi - lo
+        self.lowpass = lowpass
+        self._equiv_band = bw  # integral of |H|^2 over the band (Hz)
+        if rms is not None:
+            rms = positive("rms", rms, unit="m")
+            psd_level = rms * rms / bw
+        else:
+            psd_level = positive("psd_level", psd_level, unit="m^2/Hz")
+        self.psd_level = float(psd_level)
+        self.variance = self.psd_level * bw
+
+    def _G(self, f):
+        if self.lowpass is None:
+            return np.full(f.shape, self.psd_level)
+        return self.psd_level / (1.0 + (f / self.lowpass) ** 2)
+
+    def describe(self):
+        d = super().describe()
+        d["psd_level"] = self.psd_level
+        d["lowpass"] = float(self.lowpass) if self.lowpass is not None else "none"
+        return d
+
+
+class Realization(CosineSum):
+    """An explicit sum of cosines ``y = sum a_k cos(2 pi f_k t + phi_k)``: frequencies (Hz,
+    >= 0), amplitudes (m), phases (rad). Evaluated directly by the kernels (O(K) per time);
+    :meth:`sampled` and :meth:`blocks` tabulate it (O(K) per grid point)."""
+
+    @property
+    def variance(self) -> float:
+        """Time-averaged variance (m^2) = sum a_k^2 / 2 over components with f_k > 0."""
+        w, a = self.tab[:, 0], self.tab[:, 1]
+        return float(np.sum(0.5 * a[w > 0] ** 2))
+
+    @property
+    def band(self):
+        f = self.tab[:, 0] / (2 * math.pi)
+        return (float(f.min()), float(f.max()))
+
+    def default_step(self, interp_tol=_DEFAULT_INTERP_TOL):
+        """Grid step (s) meeting the Hermite bound (see stochastic.noise) for max frequency."""
+        return hermite_step(max(self.max_frequency(), 1e-300), interp_tol)
+
+    def _grid(self, t0, n, h):
+        y, yd, ydd = np.empty(n), np.empty(n), np.empty(n)
+        _kernels.cosine_sum_grid(float(t0), float(h), self.tab[:, 0].copy(), self.tab[:, 1].copy(),
+                                 self.tab[:, 2].copy(), y, yd, ydd)
+        return y, yd, ydd
+
+    def sampled(self, t_end, t_start=0.0, h=None) -> Sampled:
+        """``nlbeam.Sampled`` on [t_start, t_end] (s) with step ``h`` (default: Hermite bound)."""
+        t_start = finite("t_start", t_start)
+        t_end = finite("t_end", t_end)
+        if not t_end > t_start:
+            raise ValueError(f"t_end: must be > t_start = {t_start!r} s, got {t_end!r}")
+        h = self.default_step() if h is None else positive("h", h, unit="s")
+        n = int(math.ceil((t_end - t_start) / h - 1e-9)) + 1
+        y, yd, ydd = self._grid(t_start, max(n, 2), h)
+        return Sampled(t_start, h, y, yd, ydd, max_freq=self.max_frequency())
+
+    def blocks(self, t_start=0.0, t_end=None, block_duration=None, h=None):
+        """Yield ``Sampled`` tables covering [t_start, t_end] (s), sharing boundary nodes."""
+        t_start = finite("t_start", t_start)
+        t_end = finite("t_end", t_end)
+        if not t_end > t_start:
+            raise ValueError(f"t_end: must be > t_start = {t_start!r} s, got {t_end!r}")
+        h = self.default_step() if h is None else positive("h", h, unit="s")
+        nb = _DEFAULT_BLOCK_SAMPLES if block_duration is None else max(
+            int(round(positive("block_duration", block_duration, unit="s") / h)), 2)
+        n_total = int(math.ceil((t_end - t_start) / h - 1e-9))
+        j = 0
+        while j < n_total:
+            m = min(nb, n_total - j)
+            y, yd, ydd = self._grid(t_start + j * h, m + 1, h)
+            yield Sampled(t_start + j * h, h, y, yd, ydd, max_freq=self.max_frequency())
+            j += m
+
+    def describe(self):
+        return {"kind": "Realization", "n_components": int(self.tab.shape[0]),
+                "rms": math.sqrt(self.variance), "band_lo": self.band[0], "band_hi": self.band[1]}
+
+
+class Recorded(Excitation):
+    """A measured base motion ``y(t)`` (s, m), uniform or not.
+
+    The record is interpolated by a C2 cubic spline (scipy ``CubicSpline``, ``bc_type``),
+    which gives y, y', y''; these are tabulated on a uniform grid of step ``h`` as
+    ``nlbeam.Sampled``. For uniform records the default ``h`` is the sampling step: the
+    grid nodes are the spline knots and the Hermite interpolation reproduces the spline
+    exactly. For non-uniform records the default is a quarter of the smallest spacing;
+    cells that straddle a knot (where y''' of the spline jumps) err by O(h^3 |jump y'''|).
+    The excitation's accuracy is that of the record: no band limit is imposed.
+    """
+
+    def __init__(self, t, y, *, h=None, bc_type="not-a-knot"):
+        from scipy.interpolate import CubicSpline
+
+        t = np.asarray(t, dtype=float)
+        y = np.asarray(y, dtype=float)
+        if t.ndim != 1 or t.shape != y.shape or t.size < 4:
+            raise ValueError("t, y: must be 1-D arrays of one length >= 4")
+        if _kernels.all_finite(t) >= 0:
+            raise ValueError("t: must be finite")
+        if _kernels.all_finite(y) >= 0:
+            raise ValueError("y: must be finite")
+        dt = np.diff(t)
+        if np.any(dt <= 0):
+            raise ValueError("t: must be strictly increasing")
+        uniform = np.max(np.abs(dt - dt.mean())) <= 1e-9 * dt.mean()
+        if h is None:
+            h = float(dt.mean()) if uniform else float(dt.min()) / 4.0
+        else:
+            h = positive("h", h, unit="s")
+        spline = CubicSpline(t, y, bc_type=bc_type)
+        n = int(math.floor((t[-1] - t[0]) / h * (1 + 1e-12))) + 1
+        tg = t[0] + h * np.arange(n)
+        if uniform and abs(h - dt.mean()) <= 1e-12 * h:
+            tg = t.copy()
+            n = t.size
+        tg = np.minimum(tg, t[-1])
+        self.t_start = float(t[0])
+        self.t_end = float(t[0] + (n - 1) * h)
+        self.h = h
+        self.uniform = bool(uniform)
+        self._y = spline(tg)
+        self._yd = spline(tg, 1)
+        self._ydd = spline(tg, 2)
+        self._nyq = 0.5 / float(np.median(dt))
+        self.variance = float(np.var(y))
+        self._table = Sampled(self.t_start, h, self._y, self._yd, self._ydd, max_freq=self._nyq)
+
+    @property
+    def duration(self):
+        return self.t_end - self.t_start
+
+    def kernel_args(self):
+        return self._table.kernel_args()
+
+    def time_span(self):
+        return (self.t_start, self.t_end)
+
+    def max_frequency(self):
+        return self._nyq
+
+    def sampled(self, t_end=None, t_start=None) -> Sampled:
+        """The whole tabulated record as ``nlbeam.Sampled`` (or a trimmed copy)."""
+        if t_end is None and t_start is None:
+            return self._table
+        return next(iter(self.blocks(t_start if t_start is not None else self.t_start,
+                                     t_end if t_end is not None else self.t_end,
+                                     block_duration=math.inf)))
+
+    def blocks(self, t_start=None, t_end=None, block_duration=None):
+        """Yield slices of the table covering [t_start, t_end] (s), sharing boundary nodes."""
+        t_start = self.t_start if t_start is None else finite("t_start", t_start)
+        t_end = self.t_end if t_end is None else finite("t_end", t_end)
+        if not (self.t_start - 1e-9 * self.h <= t_start < t_end <= self.t_end + 1e-9 * self.h):
+            raise ValueError(f"t_start, t_end: must satisfy {self.t_start} <= t_start < t_end <= "
+                             f"{self.t_end} s (the record), got ({t_start!r}, {t_end!r})")
+        ja = max(int(math.floor((t_start - self.t_start) / self.h + 1e-9)), 0)
+        jend = min(int(math.ceil((t_end - self.t_start) / self.h - 1e-9)), self._y.size - 1)
+        nb = _DEFAULT_BLOCK_SAMPLES if block_duration is None else (
+            jend - ja if math.isinf(block_duration) else
+            max(int(round(positive("block_duration", block_duration, unit="s") / self.h)), 1))
+        j = ja
+        while j < jend:
+            k = min(j + nb, jend)
+            yield Sampled(self.t_start + j * self.h, self.h, self._y[j: k + 1], self._yd[j: k + 1],
+                          self._ydd[j: k + 1], max_freq=self._nyq)
+            j = k
+
+    def describe(self):
+        return {"kind": "Recorded", "t_start": self.t_start, "t_end": self.t_end,
+                "n": int(self._y.size), "h": self.h, "uniform": self.uniform,
+                "rms": math.sqrt(self.variance)}
