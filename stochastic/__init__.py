@@ -3,6 +3,10 @@ estimators (Welch PSD, histogram PDF, moments) and the simulation loop.
 
 Importing this package loads neither matplotlib nor h5py.
 """
+from .estimators import (StreamingHistogram, StreamingMoments, WelchPSD, correlation_from_psd,
+                         welch_dof)
 from .noise import BandLimitedNoise, Realization, Recorded, SpectralNoise, hermite_step
 
-__all__ = ["BandLimitedNoise", "SpectralNoise", "Realization", "Recorded", "hermite_step"]
+__all__ = ["BandLimitedNoise", "SpectralNoise", "Realization", "Recorded", "hermite_step",
+           "WelchPSD", "StreamingHistogram", "StreamingMoments", "correlation_from_psd",
+           "welch_dof"]
