@@ -299,6 +299,80 @@ def rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
     return 0
 
 
+@njit(cache=True)
+def rk_step_graded(meth, mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, want_var, sysa, xc, xp,
+                   xtab, s_out, P_out, KS, KP, KT, ytmp, Ptmp, fel):
+    """One RK step in a graded variable that removes the delta^1.5 singularity of the contact
+    force at a contact boundary of element e (then the solution is smooth in that variable):
+
+    mode 1, onset: sigma = sqrt(t - t_ref), t_ref the onset time; d/dsigma = 2 sigma d/dt.
+    mode 2, exit: u = sqrt(delta_e); t is integrated too, dt/du = 2u / delta_e'.
+    Advances from u0 by hu (hu < 0 in mode 2). Returns (status, t at the end)."""
+    A, B, BH, Cc = tableau(meth)
+    ns = B.shape[0]
+    n = s.shape[0]
+    m = P.shape[1]
+    for i in range(ns):
+        for q in range(n):
+            acc = s[q]
+            for j in range(i):
+                acc += hu * A[i, j] * KS[j, q]
+            ytmp[q] = acc
+        if want_var:
+            for q in range(n):
+                for c in range(m):
+                    acc = P[q, c]
+                    for j in range(i):
+                        acc += hu * A[i, j] * KP[j, q, c]
+                    Ptmp[q, c] = acc
+        ui = u0 + Cc[i] * hu
+        if mode == 1:
+            ti = t_ref + ui * ui
+        else:
+            ti = tcur
+            for j in range(i):
+                ti += hu * A[i, j] * KT[j]
+        st = deriv(ti, ytmp, Ptmp, dvm, disc, want_var, sysa, xc, xp, xtab, KS[i], KP[i], fel)
+        if st != 0:
+            return st, tcur
+        if mode == 1:
+            sc = 2.0 * ui
+        else:
+            y, yd, ydd, st = excite(ti, xc, xp, xtab)
+            d, dd = kinematics(e, ytmp, y, yd, sysa)
+            if dd >= 0.0:
+                return ERR_EVENT, tcur
+            sc = 2.0 * ui / dd
+        KT[i] = sc
+        for q in range(n):
+            KS[i, q] *= sc
+        if want_var:
+            for q in range(n):
+                for c in range(m):
+                    KP[i, q, c] *= sc
+    for q in range(n):
+        acc = s[q]
+        for j in range(ns):
+            acc += hu * B[j] * KS[j, q]
+        s_out[q] = acc
+        if not math.isfinite(acc):
+            return ERR_NONFINITE, tcur
+    if want_var:
+        for q in range(n):
+            for c in range(m):
+                acc = P[q, c]
+                for j in range(ns):
+                    acc += hu * B[j] * KP[j, q, c]
+                P_out[q, c] = acc
+    if mode == 1:
+        ue = u0 + hu
+        return 0, t_ref + ue * ue
+    tn = tcur
+    for j in range(ns):
+        tn += hu * B[j] * KT[j]
+    return 0, tn
+
+
 # --- dense output: quintic Hermite in x through (x, v, a) at both ends -------------------------
 @njit(cache=True)
 def hermite5(x0, v0, a0, x1, v1, a1, h, th):
@@ -424,17 +498,99 @@ def contact_step(e, v0, sysa, spc):
 
 
 @njit(cache=True)
+def _store(n_stored, t, s, disc, xc, xp, xtab, sysa, out_t, out_s, out_d, out_f):
+    y, yd, ydd, st = excite(t, xc, xp, xtab)
+    etype = sysa[4]
+    out_t[n_stored] = t
+    for q in range(s.shape[0]):
+        out_s[n_stored, q] = s[q]
+    for e in range(etype.shape[0]):
+        d, dd = kinematics(e, s, y, yd, sysa)
+        out_d[n_stored, e] = d
+        f, a1, a2, a3 = element_force(etype[e], sysa[8][e], d, dd, disc[e, 1], disc[e, 0])
+        out_f[n_stored, e] = f
+    return n_stored + 1
+
+
+@njit(cache=True)
+def _crossing(meth, t, h, s, s_new, f0, f1, P, dvm, disc, e, sysa, xc, xp, xtab,
+              s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w):
+    """Does element e change contact status within the time step (t, s) -> (t+h, s_new)?
+    Returns (tau of the boundary, status); tau < 0 when there is none."""
+    N = s.shape[0] // 2
+    ew = sysa[5]
+    sign = -1.0 if disc[e, 0] != 0.0 else 1.0
+    y0, yd0, ydd0, st = excite(t, xc, xp, xtab)
+    y1, yd1, ydd1, st = excite(t + h, xc, xp, xtab)
+    d0, dd0 = kinematics(e, s, y0, yd0, sysa)
+    d1, dd1 = kinematics(e, s_new, y1, yd1, sysa)
+    phi0 = sign * d0
+    phi1 = sign * d1
+    hi = -1.0
+    phihi = 0.0
+    if phi1 > 0.0:
+        hi = h
+        phihi = phi1
+    elif sign * dd0 > 0.0 and sign * dd1 < 0.0:
+        # the boundary may be touched between the step ends: find the extremum of delta on the
+        # quintic dense output, then check it on the step map
+        wx0 = 0.0
+        wv0 = 0.0
+        wa0 = 0.0
+        wx1 = 0.0
+        wv1 = 0.0
+        wa1 = 0.0
+        for j in range(N):
+            wx0 += ew[e, j] * s[j]
+            wv0 += ew[e, j] * s[N + j]
+            wa0 += ew[e, j] * f0[N + j]
+            wx1 += ew[e, j] * s_new[j]
+            wv1 += ew[e, j] * s_new[N + j]
+            wa1 += ew[e, j] * f1[N + j]
+        lo_b = 0.0
+        hi_b = 1.0
+        for _ in range(50):
+            th = 0.5 * (lo_b + hi_b)
+            xw, xwd = hermite5(wx0, wv0, wa0, wx1, wv1, wa1, h, th)
+            ym, ydm, yddm, st2 = excite(t + th * h, xc, xp, xtab)
+            if sign * (xwd + sysa[6][e] * ydm) > 0.0:
+                lo_b = th
+            else:
+                hi_b = th
+        th = 0.5 * (lo_b + hi_b)
+        xw, xwd = hermite5(wx0, wv0, wa0, wx1, wv1, wa1, h, th)
+        ym, ydm, yddm, st2 = excite(t + th * h, xc, xp, xtab)
+        dmh = sign * (xw + sysa[6][e] * ym - sysa[7][e])
+        if dmh > -1e-3 * max(abs(d0), abs(d1)):
+            tm = th * h
+            dm, st = delta_after(meth, t, tm, s, P, dvm, disc, e, sign, sysa, xc, xp,
+                                 xtab, f0, s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w)
+            if dm > 0.0:
+                hi = tm
+                phihi = dm
+    if hi <= 0.0:
+        return -1.0, 0
+    if phi0 > 0.0:
+        phi0 = 0.0
+    return locate(meth, t, 0.0, hi, phi0, phihi, s, P, dvm, disc, e, sign, sysa, xc, xp, xtab,
+                  f0, s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w)
+
+
+@njit(cache=True)
 def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_init, max_steps,
-                     s0, disc0, events_on, want_var, P0, dvm0, track_xmax, store_every,
+                     s0, disc0, events_on, want_var, P0, dvm0, track_xmax, store_every, graded,
                      out_t, out_s, out_d, out_f,
                      s_end, disc_end, P_end, dvm_end, xmax, counters, fcounters):
     """Integrate from t0 to t_end.
 
-    Fixed-step methods (RK2, RK4) step on the grid t0 + k dt, with steps of the contact length
-    / spc while any element is in contact, and land on every contact boundary (root of the step
-    map, to a few ulps), then step on to the next grid point. DP5 controls its error with
-    (rtol, atol) and writes samples onto the grid by quintic Hermite dense output.
-    Samples: every store_every-th grid point, t0 included, and t_end.
+    Fixed-step methods (RK2, RK4) step on the grid t0 + k dt, with steps of (estimated contact
+    duration) / spc while an element is in contact, land on every contact boundary (root of
+    the step map, to a few ulps of t), then step on to the next grid point. With ``graded``, the
+    first quarter of a contact is stepped uniformly in sigma = sqrt(t - t_onset) and the last
+    part uniformly in u = sqrt(delta), which removes the delta^1.5 singularity of the contact
+    force at both boundaries. DP5 controls its error with (rtol, atol) and writes samples onto
+    the grid by quintic Hermite dense output. Samples: every store_every-th grid point, t0 and
+    t_end included.
 
     counters: [n_stored, n_steps, n_rejected, n_rhs, n_impacts, min_steps_per_contact,
                n_contacts, n_events]
@@ -449,6 +605,7 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
     ns = B.shape[0]
     KS = np.zeros((ns, n))
     KP = np.zeros((ns, n, m))
+    KT = np.zeros(ns)
     ytmp = np.zeros(n)
     Ptmp = np.zeros((n, m))
     fel = np.zeros(ne)
@@ -460,7 +617,6 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
     s_new = np.zeros(n)
     P_new = np.zeros((n, m))
     s_try = np.zeros(n)
-    P_try = np.zeros((n, m))
     f0 = np.zeros(n)
     f1 = np.zeros(n)
     dummyP = np.zeros((n, m))
@@ -468,7 +624,7 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
     dtc = np.full(ne, np.inf)
     for e in range(ne):
         if disc[e, 0] != 0.0:
-            dtc[e] = contact_step(e, disc[e, 1], sysa, spc)
+            dtc[e] = contact_step(e, abs(disc[e, 1]), sysa, spc)
 
     n_stored = 0
     n_steps = 0
@@ -480,12 +636,19 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
     n_events = 0
     max_land = 0.0
     fixed = meth != DP5
-    k_grid = 0  # index of the last grid point reached
+    n_grade = max(2, int(spc // 4))
+    k_grid = 0
     n_grid = int(math.ceil((t_end - t0) / dt - 1e-9))
     t = t0
     h = h_init
     status = 0
     en = 1.0
+    phase = 0       # 0: time steps; 1: onset, steps in sigma; 2: exit, steps in u
+    pe = -1         # the element of the graded phase
+    g_t0 = 0.0
+    g_u = 0.0
+    g_end = 0.0
+    g_h = 0.0
 
     st = deriv(t, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0, KP[0], fel)
     n_rhs += 1
@@ -494,144 +657,197 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
     if track_xmax:
         for i in range(N):
             xmax[i] = max(xmax[i], abs(s[i]))
-    # store t0
     if store_every > 0 and out_t.shape[0] > 0:
-        y, yd, ydd, st = excite(t, xc, xp, xtab)
-        out_t[0] = t
-        for q in range(n):
-            out_s[0, q] = s[q]
-        for e in range(ne):
-            out_d[0, e], dd = kinematics(e, s, y, yd, sysa)
-            out_f[0, e] = fel[e]
-        n_stored = 1
+        n_stored = _store(n_stored, t, s, disc, xc, xp, xtab, sysa, out_t, out_s, out_d, out_f)
 
     while t < t_end and status == 0:
         if n_steps >= max_steps:
             status = ERR_MAX_STEPS
             break
-        # ---- choose the step
         tg = t0 + (k_grid + 1) * dt if k_grid + 1 < n_grid else t_end
-        if fixed:
-            hc = np.inf
-            for e in range(ne):
-                if disc[e, 0] != 0.0 and dtc[e] < hc:
-                    hc = dtc[e]
-            hit_grid = True
-            h = tg - t
-            if hc < h:
-                h = hc
-                hit_grid = False
-                if tg - t - h < 1e-9 * h:  # do not leave a sliver before the grid point
-                    h = tg - t
-                    hit_grid = True
-        else:
-            hit_grid = False
-            if h >= t_end - t:
-                h = t_end - t
-            if h < 1e-14 * max(abs(t), 1.0):
-                status = ERR_STEP_UNDERFLOW
-                break
-        # ---- trial step
-        st = rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
-                     s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
-        n_rhs += ns - (0 if want_var else 1)
-        if st != 0:
-            status = st
-            break
-        if not fixed:
-            # error norm (RMS), relative to the larger of the two states
-            en = 0.0
-            for q in range(n):
-                sc = atol + rtol * max(abs(s[q]), abs(s_new[q]))
-                en += (err_w[q] / sc) ** 2
-            en = math.sqrt(en / n)
-            if en > 1.0:
-                h = h * max(0.2, 0.9 * en ** -0.2)
-                n_rej += 1
-                n_steps += 1
-                continue
-        if fixed:
-            t_new = tg if hit_grid else t + h
-        else:
-            t_new = t_end if t + h >= t_end else t + h
-        st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
-        n_rhs += 1
-        if st != 0:
-            status = st
-            break
-        # ---- events: the earliest boundary crossed in this step
         ev = -1
-        tau_ev = h
-        if events_on:
-            y1, yd1, ydd1, st = excite(t_new, xc, xp, xtab)
-            y0, yd0, ydd0, st = excite(t, xc, xp, xtab)
-            ew = sysa[5]
+        tau_ev = 0.0
+        hit_grid = False
+        landed = False
+        if fixed and phase == 2:
+            # exit phase: is it still valid (one element in contact, delta' < 0)?
+            y, yd, ydd, st = excite(t, xc, xp, xtab)
+            d, dd = kinematics(pe, s, y, yd, sysa)
+            if disc[pe, 0] == 0.0 or dd >= 0.0 or d <= 0.0:
+                phase = 0
+            else:
+                g_u = math.sqrt(d)
+        if fixed and phase == 0 and graded and events_on:
+            # enter the exit phase when the contact is predicted to end within n_grade steps
+            n_in = 0
             for e in range(ne):
-                if not has_event(etype[e]):
-                    continue
-                sign = -1.0 if disc[e, 0] != 0.0 else 1.0
-                d0, dd0 = kinematics(e, s, y0, yd0, sysa)
-                d1, dd1 = kinematics(e, s_new, y1, yd1, sysa)
-                phi0 = sign * d0
-                phi1 = sign * d1
-                hi = -1.0
-                phihi = 0.0
-                if phi1 > 0.0:
-                    hi = h
-                    phihi = phi1
-                elif sign * dd0 > 0.0 and sign * dd1 < 0.0:
-                    # the boundary may be touched between the step ends: find the extremum of
-                    # delta on the quintic dense output, then check it on the step map
-                    wx0 = 0.0
-                    wv0 = 0.0
-                    wa0 = 0.0
-                    wx1 = 0.0
-                    wv1 = 0.0
-                    wa1 = 0.0
+                if disc[e, 0] != 0.0:
+                    n_in += 1
+                    pe = e
+            if n_in == 1 and steps_in_contact[pe] > 0:
+                y, yd, ydd, st = excite(t, xc, xp, xtab)
+                d, dd = kinematics(pe, s, y, yd, sysa)
+                if dd < 0.0 and d > 0.0:
+                    dd2 = sysa[6][pe] * ydd
                     for j in range(N):
-                        wx0 += ew[e, j] * s[j]
-                        wv0 += ew[e, j] * s[N + j]
-                        wa0 += ew[e, j] * f0[N + j]
-                        wx1 += ew[e, j] * s_new[j]
-                        wv1 += ew[e, j] * s_new[N + j]
-                        wa1 += ew[e, j] * f1[N + j]
-                    lo_b = 0.0
-                    hi_b = 1.0
-                    for _ in range(50):
-                        th = 0.5 * (lo_b + hi_b)
-                        xw, xwd = hermite5(wx0, wv0, wa0, wx1, wv1, wa1, h, th)
-                        ym, ydm, yddm, st2 = excite(t + th * h, xc, xp, xtab)
-                        if sign * (xwd + sysa[6][e] * ydm) > 0.0:
-                            lo_b = th
-                        else:
-                            hi_b = th
-                    th = 0.5 * (lo_b + hi_b)
-                    xw, xwd = hermite5(wx0, wv0, wa0, wx1, wv1, wa1, h, th)
-                    ym, ydm, yddm, st2 = excite(t + th * h, xc, xp, xtab)
-                    dmh = sign * (xw + sysa[6][e] * ym - sysa[7][e])
-                    if dmh > -1e-3 * max(abs(d0), abs(d1)):
-                        tm = th * h
-                        dm, st = delta_after(meth, t, tm, s, P, dvm, disc, e, sign, sysa, xc, xp,
-                                             xtab, f0, s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w)
-                        if dm > 0.0:
-                            hi = tm
-                            phihi = dm
-                if hi > 0.0:
-                    if phi0 > 0.0:
-                        phi0 = 0.0
-                    tau, st = locate(meth, t, 0.0, hi, phi0, phihi, s, P, dvm, disc, e, sign,
-                                     sysa, xc, xp, xtab, f0, s_try, dummyP, KS, KP, ytmp, Ptmp,
-                                     fel, err_w)
+                        dd2 += sysa[5][pe, j] * f0[N + j]
+                    trem = d / (-dd)
+                    if trem <= n_grade * dtc[pe] and abs(dd2) * trem <= 0.5 * (-dd):
+                        phase = 2
+                        g_u = math.sqrt(d)
+                        g_h = g_u / n_grade
+        if fixed and phase == 1:
+            # onset phase: uniform steps in sigma = sqrt(t - t_onset), cut at the grid point
+            hs = min(g_h, g_end - g_u)
+            if g_t0 + (g_u + hs) ** 2 >= tg:
+                hs = math.sqrt(tg - g_t0) - g_u
+                hit_grid = True
+            st, t_new = rk_step_graded(meth, 1, g_u, hs, g_t0, pe, s, t, P, dvm, disc, want_var,
+                                       sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel)
+            n_rhs += ns
+            if hit_grid:
+                t_new = tg
+            ok = st == 0
+            if ok:
+                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
+                n_rhs += 1
+                yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
+                for e in range(ne):
+                    if has_event(etype[e]):
+                        d, dd = kinematics(e, s_new, yv, ydv, sysa)
+                        if (disc[e, 0] != 0.0 and d < 0.0) or (disc[e, 0] == 0.0 and d > 0.0):
+                            ok = False
+            if not ok:
+                phase = 0  # something happens inside the onset phase: fall back to time steps
+                continue
+            g_u += hs
+            if g_u >= g_end * (1.0 - 1e-12):
+                phase = 0
+        elif fixed and phase == 2:
+            hu = min(g_h, g_u)
+            st, t_new = rk_step_graded(meth, 2, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, want_var,
+                                       sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel)
+            n_rhs += ns
+            if st != 0 or t_new >= tg or t_new <= t:
+                # would pass the grid point (or the graded step failed): time step to it
+                phase = 0 if st != 0 else 2
+                h = tg - t
+                st = rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
+                             s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+                n_rhs += ns - (0 if want_var else 1)
+                if st != 0:
+                    status = st
+                    break
+                t_new = tg
+                hit_grid = True
+                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
+                n_rhs += 1
+                yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
+                d, dd = kinematics(pe, s_new, yv, ydv, sysa)
+                if d < 0.0:
+                    # the contact ended before the grid point after all: locate it
+                    tau, st = _crossing(meth, t, h, s, s_new, f0, f1, P, dvm, disc, pe, sysa, xc,
+                                        xp, xtab, s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w)
                     if st != 0:
                         status = st
                         break
-                    if ev < 0 or tau < tau_ev:
+                    if tau >= 0.0:
+                        ev = pe
+                        tau_ev = tau
+                        phase = 0
+            else:
+                g_u -= hu
+                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
+                n_rhs += 1
+                if g_u <= 0.0:
+                    # landed on delta = 0 up to the truncation error: polish to round-off by
+                    # Newton steps in time, then switch
+                    for q in range(n):
+                        s_try[q] = s_new[q]
+                    for _ in range(4):
+                        yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
+                        d, dd = kinematics(pe, s_new, yv, ydv, sysa)
+                        if abs(d) <= 1e-15 * (abs(yv) + abs(sysa[7][pe]) + 1e-300) or d == 0.0:
+                            break
+                        tau = -d / dd
+                        if want_var:
+                            for q in range(n):
+                                for c in range(m):
+                                    dummyP[q, c] = P_new[q, c]
+                        for q in range(n):
+                            s_try[q] = s_new[q]
+                        st = rk_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var, sysa, xc,
+                                     xp, xtab, f1, s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+                        t_new = t_new + tau
+                        st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1,
+                                   KP[0], fel)
+                    ev = pe
+                    tau_ev = t_new - t
+                    landed = True
+                    phase = 0
+        else:
+            # ---- an ordinary step in time
+            if fixed:
+                hc = np.inf
+                for e in range(ne):
+                    if disc[e, 0] != 0.0 and dtc[e] < hc:
+                        hc = dtc[e]
+                hit_grid = True
+                h = tg - t
+                if hc < h:
+                    h = hc
+                    hit_grid = False
+                    if tg - t - h < 1e-9 * h:  # do not leave a sliver before the grid point
+                        h = tg - t
+                        hit_grid = True
+            else:
+                if h >= t_end - t:
+                    h = t_end - t
+                if h < 1e-14 * max(abs(t), 1.0):
+                    status = ERR_STEP_UNDERFLOW
+                    break
+            st = rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
+                         s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+            n_rhs += ns - (0 if want_var else 1)
+            if st != 0:
+                status = st
+                break
+            if not fixed:
+                en = 0.0
+                for q in range(n):
+                    sc = atol + rtol * max(abs(s[q]), abs(s_new[q]))
+                    en += (err_w[q] / sc) ** 2
+                en = math.sqrt(en / n)
+                if en > 1.0:
+                    h = h * max(0.2, 0.9 * en ** -0.2)
+                    n_rej += 1
+                    n_steps += 1
+                    continue
+            if fixed:
+                t_new = tg if hit_grid else t + h
+            else:
+                t_new = t_end if t + h >= t_end else t + h
+            st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
+            n_rhs += 1
+            if st != 0:
+                status = st
+                break
+            if events_on:
+                for e in range(ne):
+                    if not has_event(etype[e]):
+                        continue
+                    tau, st = _crossing(meth, t, h, s, s_new, f0, f1, P, dvm, disc, e, sysa, xc,
+                                        xp, xtab, s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w)
+                    if st != 0:
+                        status = st
+                        break
+                    if tau >= 0.0 and (ev < 0 or tau < tau_ev):
                         tau_ev = tau
                         ev = e
-            if status != 0:
-                break
-        if ev >= 0:
-            # accept the step to the boundary
+                if status != 0:
+                    break
+        if ev >= 0 and not landed:
+            # re-take the step up to the boundary
             st = rk_step(meth, t, tau_ev, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
                          s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
             if st != 0:
@@ -641,14 +857,13 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
             hit_grid = False
             st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
             n_rhs += 1
-        # ---- accept
+        # ---- accept the step (t, s) -> (t_new, s_new)
         n_steps += 1
         for e in range(ne):
             if disc[e, 0] != 0.0:
                 steps_in_contact[e] += 1
         if track_xmax:
             step_extrema(s, f0, s_new, f1, t_new - t, N, xmax)
-        # dense output onto the grid for DP5
         if not fixed and store_every > 0:
             while k_grid < n_grid:
                 kk = k_grid + 1
@@ -658,19 +873,13 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                 k_grid = kk
                 if kk % store_every == 0 or kk == n_grid:
                     th = (tgk - t) / (t_new - t)
-                    yk, ydk, yddk, st = excite(tgk, xc, xp, xtab)
-                    out_t[n_stored] = tgk
                     for i in range(N):
                         xk, vk = hermite5(s[i], s[N + i], f0[N + i], s_new[i], s_new[N + i],
                                           f1[N + i], t_new - t, th)
-                        out_s[n_stored, i] = xk
-                        out_s[n_stored, N + i] = vk
-                    for e in range(ne):
-                        dk, ddk = kinematics(e, out_s[n_stored], yk, ydk, sysa)
-                        out_d[n_stored, e] = dk
-                        fk, a1, a2, a3 = element_force(etype[e], sysa[8][e], dk, ddk, disc[e, 1], disc[e, 0])
-                        out_f[n_stored, e] = fk
-                    n_stored += 1
+                        ytmp[i] = xk
+                        ytmp[N + i] = vk
+                    n_stored = _store(n_stored, tgk, ytmp, disc, xc, xp, xtab, sysa,
+                                      out_t, out_s, out_d, out_f)
         t = t_new
         for q in range(n):
             s[q] = s_new[q]
@@ -706,12 +915,25 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                             wx += ew[ev, j] * P[j, c]
                             wv += ew[ev, j] * P[N + j, c]
                         dvm[ev, c] = wv - dd2 * wx / disc[ev, 1]
+                if fixed and graded and dd > 0.0:
+                    n_in = 0
+                    for e in range(ne):
+                        if disc[e, 0] != 0.0:
+                            n_in += 1
+                    if n_in == 1:
+                        phase = 1
+                        pe = ev
+                        g_t0 = t
+                        g_u = 0.0
+                        g_end = math.sqrt(n_grade * dtc[ev])
+                        g_h = g_end / n_grade
             else:
                 disc[ev, 0] = 0.0
                 n_contacts += 1
                 if steps_in_contact[ev] < min_spc:
                     min_spc = steps_in_contact[ev]
                 dtc[ev] = np.inf
+                phase = 0
             # f0 after the switch (the field is continuous; the law's memory changed)
             st = deriv(t, s, P, dvm, disc, False, sysa, xc, xp, xtab, f0, KP[0], fel)
             n_rhs += 1
@@ -719,18 +941,11 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
         if fixed and hit_grid:
             k_grid += 1
             if store_every > 0 and (k_grid % store_every == 0 or k_grid == n_grid):
-                y, yd, ydd, st = excite(t, xc, xp, xtab)
-                out_t[n_stored] = t
-                for q in range(n):
-                    out_s[n_stored, q] = s[q]
-                for e in range(ne):
-                    out_d[n_stored, e], dd = kinematics(e, s, y, yd, sysa)
-                    out_f[n_stored, e] = fel[e]
-                n_stored += 1
+                n_stored = _store(n_stored, t, s, disc, xc, xp, xtab, sysa,
+                                  out_t, out_s, out_d, out_f)
             if k_grid >= n_grid:
                 t = t_end
         if not fixed:
-            # next step size
             if en == 0.0:
                 fac = 5.0
             else:

@@ -159,7 +159,7 @@ def _initial(model, x0, disc0, t0, excitation):
 
 
 def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc,
-         events, want_var, P0, dvm0, track_xmax, store_every):
+         events, want_var, P0, dvm0, track_xmax, store_every, graded=True):
     sysa = model.kernel_arrays()
     xc, xp, xtab = excitation.kernel_args()
     N = model.n_dof
@@ -184,7 +184,7 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
     status = _k.integrate_kernel(sysa, xc, xp, xtab, METHODS[method], float(t0), float(t_end),
                                  dt, spc, float(rtol), float(atol), h_init, int(max_steps),
                                  s0, disc, bool(events), bool(want_var), P0, dvm0,
-                                 bool(track_xmax), int(store_every), out_t, out_s, out_d, out_f,
+                                 bool(track_xmax), int(store_every), bool(graded), out_t, out_s, out_d, out_f,
                                  s_end, disc_end, P_end, dvm_end, xmax, counters, fcounters)
     if status != 0:
         raise IntegrationError(_status_message(status, fcounters[0], method))
@@ -199,7 +199,7 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
 
 def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.0,
               disc0=None, store_every=1, steps_per_contact=None, rtol=1e-8, atol=1e-12,
-              events=True, max_steps=100_000_000):
+              events=True, graded=True, max_steps=100_000_000):
     """Integrate ``model`` driven by ``excitation`` from t0 to t_end (s).
 
     method: 'rk2' (the paper's constant-step scheme, Heun), 'rk4', both with step ``dt`` (s)
@@ -207,7 +207,9 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
     (Dormand-Prince 5(4) with tolerances rtol, atol and quintic Hermite dense output; ``dt`` is
     then the output spacing). Every contact onset and end is located to a few ulps of t and
     stepped onto; no step crosses a contact boundary (``events=False`` switches this off, for
-    comparison only). x0: initial state [x_1..x_N, v_1..v_N] (default: at rest).
+    comparison only). With ``graded`` (default) the fixed-step methods step the start of each
+    contact uniformly in sqrt(t - t_onset) and its end uniformly in sqrt(delta), which keeps
+    their order across the delta^1.5 singularity of Hertz-type contact forces. x0: initial state [x_1..x_N, v_1..v_N] (default: at rest).
     store_every: keep every k-th grid sample (0: none, only the end state).
     Returns a :class:`Trajectory`.
     """
@@ -224,7 +226,7 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
     dvm0 = np.zeros((ne, 1))
     (t, S, D, F, s_end, disc_end, _, _, xmax, c, fc) = _run(
         model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc, events,
-        False, P0, dvm0, True, store_every)
+        False, P0, dvm0, True, store_every, graded)
     return Trajectory(t=t, x=S[:, :N], v=S[:, N:], delta=D, force=F, n_impacts=int(c[4]),
                       state_end=s_end, disc_end=disc_end, t_end=float(t_end), method=method,
                       dt=dt, steps_per_contact=spc, n_steps=int(c[1]), n_rejected=int(c[2]),
@@ -234,7 +236,7 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
 
 def flow(model, excitation, state0, t0, duration, *, monodromy=False, disc0=None,
          method="rk4", dt=None, steps_per_contact=None, rtol=1e-10, atol=1e-14, events=True,
-         max_steps=100_000_000):
+         graded=True, max_steps=100_000_000):
     """The state at t0 + duration (s) from ``state0`` at t0, with ``xmax`` over the interval.
 
     With ``monodromy=True`` the variational equations are integrated alongside with the same
@@ -265,7 +267,7 @@ def flow(model, excitation, state0, t0, duration, *, monodromy=False, disc0=None
         dvm0 = np.zeros((ne, 1))
     (_, _, _, _, s_end, disc_end, P, dvm, xmax, c, fc) = _run(
         model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc, events,
-        monodromy, P0, dvm0, True, 0)
+        monodromy, P0, dvm0, True, 0, graded)
     if monodromy:
         M = P[:, :2 * N].copy()
         dS_dv = P[:, 2 * N:].copy() if in_contact else None
