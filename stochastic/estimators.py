@@ -422,13 +422,16 @@ class StreamingMoments:
     def result(self, rho=None) -> dict:
         """mean, std, skewness, kurtosis, n and standard errors.
 
-        Gaussian-process standard errors: se_mean = std sqrt(S1/n), se_skewness =
+        Gaussian-process standard errors: se_mean = std sqrt(S1/n), se_variance =
+        std^2 sqrt(2 S2/n), se_skewness =
         sqrt(6 S3/n), se_kurtosis = sqrt(24 S4/n), with S_k = 1 + 2 sum_{j>=1} rho_j^k the
         correlation sums of the sampled record (rho: autocorrelation coefficients at lags
         0, 1, ... samples, e.g. from :func:`correlation_from_psd`; None: independent samples,
         S_k = 1). n_eff_k = n / S_k are reported. With batches (batch_size), batch-means
         standard errors std(batch values)/sqrt(n_batches) are given too (no Gaussian
-        assumption; valid when a batch is much longer than the correlation time).
+        assumption; valid when a batch is much longer than the correlation time). When the
+        PSD vanishes at f = 0 (band-pass records) S1 -> 0 and se_mean from it is not
+        meaningful; use se_batch_mean.
         """
         if self.n < 2:
             raise ValueError(f"x: need at least 2 samples for moments, got {self.n}")
@@ -443,7 +446,8 @@ class StreamingMoments:
             S = [1.0 + 2.0 * float(np.sum(r ** k)) for k in (1, 2, 3, 4)]
             S = [max(s, 1.0 / n) for s in S]
         out = {"mean": mean, "std": std, "skewness": skew, "kurtosis": kurt, "n": n,
-               "se_mean": std * math.sqrt(S[0] / n), "se_skewness": math.sqrt(6.0 * S[2] / n),
+               "se_mean": std * math.sqrt(S[0] / n), "variance": std * std,
+               "se_variance": std * std * math.sqrt(2.0 * S[1] / n), "se_skewness": math.sqrt(6.0 * S[2] / n),
                "se_kurtosis": math.sqrt(24.0 * S[3] / n),
                "n_eff_mean": n / S[0], "n_eff_skewness": n / S[2], "n_eff_kurtosis": n / S[3],
                "correlation_known": rho is not None, "n_batches": len(self._batches)}

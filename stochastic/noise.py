@@ -19,6 +19,14 @@ over the band; ``z_i`` never repeats within its span (its envelope period ``1/df
 ``B + L``). ``z_i`` is evaluated on the grid ``tau_j = j h`` by one complex FFT,
 ``z = Re[exp(2 pi i (f_lo + u df) tau) * N ifft(c)]``, together with ``z'`` and ``z''``.
 
+Amplitudes: by default deterministic, ``sqrt(2 G df)`` (the paper's method): every block's
+line spectrum is the target exactly, so a Welch estimate of the excitation scatters *less*
+than the chi-square law of a Gaussian process, and each sample is Gaussian only through the
+central limit over the lines (kurtosis 3 - 3/(2 n_lines) for equal amplitudes).
+``random_amplitudes=True`` multiplies each amplitude by ``sqrt(E_k)``, ``E_k ~ Exp(1)``
+(Rayleigh amplitudes): then ``z_i`` is exactly a Gaussian process and its estimates scatter
+as chi-square predicts. The phases are the same in both modes for the same seed.
+
 Consecutive realizations are joined over the first ``L = fade_duration`` seconds of each
 block by the power-complementary pair ``w_in = sin(pi/2 g(s))``, ``w_out = cos(pi/2 g(s))``,
 ``s = (t - i B)/L``, ``g(s) = s^3 (10 - 15 s + 6 s^2)``: ``w_in^2 + w_out^2 = 1`` keeps the
@@ -101,8 +109,12 @@ class _BlockNoise(Excitation):
     """Common machinery: block grid, seeds, FFT synthesis, cross-fades. Subclasses provide
     ``_G(f)`` (target one-sided PSD on the band, vectorized, m^2/Hz) and ``variance``."""
 
-    def _setup(self, band, seed, duration, h, block_duration, fade_duration, interp_tol):
+    def _setup(self, band, seed, duration, h, block_duration, fade_duration, interp_tol,
+               random_amplitudes=False):
         self.band = _check_band(band)
+        if not isinstance(random_amplitudes, (bool, np.bool_)):
+            raise ValueError(f"random_amplitudes: must be True or False, got {random_amplitudes!r}")
+        self.random_amplitudes = bool(random_amplitudes)
         self.seed = _seed_entropy(seed)
         if duration is not None:
             duration = positive("duration", duration, unit="s")
@@ -184,7 +196,8 @@ class _BlockNoise(Excitation):
                 "duration": float(self.duration) if self.duration is not None else "none",
                 "h": self.h, "block_duration": self.block_duration,
                 "fade_duration": self.fade_duration, "df_lines": self.df,
-                "interp_tol": self.interp_tol, "method": "spectral-representation blocks, FFT, "
+                "interp_tol": self.interp_tol, "random_amplitudes": self.random_amplitudes,
+                "method": "spectral-representation blocks, FFT, "
                 "random line offset, sin/cos cross-fades"}
 
     # -- synthesis ------------------------------------------------------------------------
@@ -202,6 +215,8 @@ class _BlockNoise(Excitation):
             bad = f[~(np.isfinite(g) & (g >= 0))][0]
             raise ValueError(f"psd: must be finite and >= 0 on the band, got {self.psd(bad)!r} at {bad!r} Hz")
         amps = np.sqrt(2.0 * g * self.df)
+        if self.random_amplitudes:
+            amps *= np.sqrt(rng.standard_exponential(self.n_lines))
         return {"frequencies": f, "amplitudes": amps, "phases": phases,
                 "t_ref": i * self.block_duration, "offset": u}
 
@@ -211,7 +226,8 @@ class _BlockNoise(Excitation):
         return int(i)
 
     def _realization(self, i):
-        """z_i, z_i', z_i'' on tau_j = j h, j = 0 .. n_block + n_fade (cached, 3 entries)."""
+        """z_i, z_i', z_i'' on tau_j = j h, j = 0 .. n_block + n_fade (a small LRU cache holds
+        the last realizations and blocks: memory stays that of a few blocks)."""
         if i in self._cache:
             self._cache.move_to_end(i)
             return self._cache[i]
@@ -232,7 +248,7 @@ class _BlockNoise(Excitation):
         carrier = np.exp(2j * math.pi * cyc)
         z = (s * carrier).real
         self._cache[i] = z
-        while len(self._cache) > 3:
+        while len(self._cache) > 4:
             self._cache.popitem(last=False)
         return z
 
@@ -254,6 +270,10 @@ class _BlockNoise(Excitation):
     def block_arrays(self, i):
         """(t_start, y, y', y'') of block ``i`` on ``t_start + j h``, j = 0 .. n_block (s, m, m/s, m/s^2)."""
         i = self._block_index(i)
+        key = ("block", i)
+        if key in self._cache:
+            self._cache.move_to_end(key)
+            return self._cache[key]
         nb, nf = self.n_block, self.n_fade
         z = self._realization(i)
         y = z[:, : nb + 1].copy()
@@ -266,7 +286,11 @@ class _BlockNoise(Excitation):
             y[1, : nf + 1] = w1 * zi[0] + w0 * zi[1] + v1 * zp[0] + v0 * zp[1]
             y[2, : nf + 1] = (w2 * zi[0] + 2.0 * w1 * zi[1] + w0 * zi[2]
                               + v2 * zp[0] + 2.0 * v1 * zp[1] + v0 * zp[2])
-        return i * self.block_duration, y[0], y[1], y[2]
+        res = (i * self.block_duration, y[0], y[1], y[2])
+        self._cache[key] = res
+        while len(self._cache) > 4:
+            self._cache.popitem(last=False)
+        return res
 
     def block(self, i) -> Sampled:
         """Block ``i`` as ``nlbeam.Sampled`` on [i B, (i+1) B] (s)."""
@@ -351,27 +375,28 @@ class SpectralNoise(_BlockNoise):
     rms: if given (m), the PSD is rescaled so that the variance is ``rms^2``.
     seed: non-negative int (None draws one, reported by ``describe()``).
     duration: record length (s) used by default by ``sampled``/``blocks``/``simulate``.
-    h, block_duration, fade_duration, interp_tol: synthesis grid (see the module doc).
+    h, block_duration, fade_duration, interp_tol, random_amplitudes: see the module doc.
     """
 
     def __init__(self, psd, band, *, rms=None, seed=None, duration=None, h=None,
-                 block_duration=None, fade_duration=None, interp_tol=_DEFAULT_INTERP_TOL):
-        self._setup(band, seed, duration, h, block_duration, fade_duration, interp_tol)
+                 block_duration=None, fade_duration=None, interp_tol=_DEFAULT_INTERP_TOL,
+                 random_amplitudes=False):
+        self._setup(band, seed, duration, h, block_duration, fade_duration, interp_tol,
+                    random_amplitudes)
         lo, hi = self.band
         if callable(psd):
             self._table_f = None
             self._fn = psd
             from scipy.integrate import quad
 
-            val, err = quad(lambda f: float(np.asarray(self._fn(np.array([f])), float).ravel()[0]),
-                            lo, hi, limit=500)
             probe = np.linspace(lo, hi, 1001)
             g = np.asarray(psd(probe), dtype=float)
             if g.shape != probe.shape:
                 g = np.broadcast_to(g, probe.shape)
             if not np.all(np.isfinite(g)) or np.any(g < 0):
                 raise ValueError("psd: must return finite values >= 0 (m^2/Hz) on the band")
-            raw_var = val
+            raw_var, _ = quad(lambda f: float(np.asarray(self._fn(np.array([f])), float).ravel()[0]),
+                              lo, hi, limit=500)
         else:
             try:
                 f_tab, g_tab = (np.asarray(a, dtype=float) for a in psd)
@@ -425,12 +450,15 @@ class BandLimitedNoise(_BlockNoise):
     band: ``(f_lo, f_hi)`` Hz, ``0 <= f_lo < f_hi``. Exactly one of ``rms`` (m, of the
     filtered signal) or ``psd_level`` (m^2/Hz, the flat level before the filter).
     lowpass: corner frequency (Hz) or None. seed: non-negative int (None draws one).
-    duration: record length (s). h, block_duration, fade_duration, interp_tol: see module doc.
+    duration: record length (s). h, block_duration, fade_duration, interp_tol,
+    random_amplitudes: see the module doc.
     """
 
     def __init__(self, band, rms=None, psd_level=None, seed=None, lowpass=None, duration=None, *,
-                 h=None, block_duration=None, fade_duration=None, interp_tol=_DEFAULT_INTERP_TOL):
-        self._setup(band, seed, duration, h, block_duration, fade_duration, interp_tol)
+                 h=None, block_duration=None, fade_duration=None, interp_tol=_DEFAULT_INTERP_TOL,
+                 random_amplitudes=False):
+        self._setup(band, seed, duration, h, block_duration, fade_duration, interp_tol,
+                    random_amplitudes)
         lo, hi = self.band
         if (rms is None) == (psd_level is None):
             raise ValueError("rms, psd_level: give exactly one of rms (m) or psd_level (m^2/Hz)")
@@ -527,7 +555,7 @@ class Recorded(Excitation):
     which gives y, y', y''; these are tabulated on a uniform grid of step ``h`` as
     ``nlbeam.Sampled``. For uniform records the default ``h`` is the sampling step: the
     grid nodes are the spline knots and the Hermite interpolation reproduces the spline
-    exactly. For non-uniform records the default is a quarter of the smallest spacing;
+    exactly. For non-uniform records the default is a quarter of the median spacing;
     cells that straddle a knot (where y''' of the spline jumps) err by O(h^3 |jump y'''|).
     The excitation's accuracy is that of the record: no band limit is imposed.
     """
@@ -548,11 +576,14 @@ class Recorded(Excitation):
             raise ValueError("t: must be strictly increasing")
         uniform = np.max(np.abs(dt - dt.mean())) <= 1e-9 * dt.mean()
         if h is None:
-            h = float(dt.mean()) if uniform else float(dt.min()) / 4.0
+            h = float(dt.mean()) if uniform else float(np.median(dt)) / 4.0
         else:
             h = positive("h", h, unit="s")
-        spline = CubicSpline(t, y, bc_type=bc_type)
         n = int(math.floor((t[-1] - t[0]) / h * (1 + 1e-12))) + 1
+        if n > _MAX_TABLE_SAMPLES:
+            raise ValueError(f"h: {h:.6g} s would tabulate {n:.3g} samples (> {_MAX_TABLE_SAMPLES}); "
+                             f"give a larger h")
+        spline = CubicSpline(t, y, bc_type=bc_type)
         tg = t[0] + h * np.arange(n)
         if uniform and abs(h - dt.mean()) <= 1e-12 * h:
             tg = t.copy()
