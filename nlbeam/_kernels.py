@@ -447,8 +447,11 @@ def locate(meth, t, lo, hi, phi_lo, phi_hi, s, P, dvm, disc, e, sign, sysa, xc, 
     Illinois method. Returns (tau_hi, status): the bracket end on the far side (phi >= 0), at
     most a few ulps of t from the root."""
     side = 0
+    if phi_lo >= 0.0:
+        return lo, 0
+    tol = 4e-16 * (abs(t) + hi)
     for _ in range(200):
-        if hi - lo <= 4e-16 * max(abs(t + hi), 1e-300) + 1e-300:
+        if hi - lo <= tol:
             return hi, 0
         tau = (lo * phi_hi - hi * phi_lo) / (phi_hi - phi_lo)
         if not (tau > lo and tau < hi):
@@ -579,7 +582,7 @@ def _crossing(meth, t, h, s, s_new, f0, f1, P, dvm, disc, e, sysa, xc, xp, xtab,
 @njit(cache=True)
 def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_init, max_steps,
                      s0, disc0, events_on, want_var, P0, dvm0, track_xmax, store_every, graded,
-                     out_t, out_s, out_d, out_f,
+                     out_t, out_s, out_d, out_f, ev_log,
                      s_end, disc_end, P_end, dvm_end, xmax, counters, fcounters):
     """Integrate from t0 to t_end.
 
@@ -595,6 +598,7 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
     counters: [n_stored, n_steps, n_rejected, n_rhs, n_impacts, min_steps_per_contact,
                n_contacts, n_events]
     fcounters: [t_reached, max |delta| at a landed event]
+    ev_log (cap, 4): [t, element, 1 onset / 0 end, delta' at the boundary] of the first cap events.
     """
     etype = sysa[4]
     N = sysa[0].shape[0]
@@ -890,9 +894,14 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                     P[q, c] = P_new[q, c]
         # ---- switch the discrete state at an event
         if ev >= 0:
-            n_events += 1
             y, yd, ydd, st = excite(t, xc, xp, xtab)
             d, dd = kinematics(ev, s, y, yd, sysa)
+            if n_events < ev_log.shape[0]:
+                ev_log[n_events, 0] = t
+                ev_log[n_events, 1] = ev
+                ev_log[n_events, 2] = 1.0 if disc[ev, 0] == 0.0 else 0.0
+                ev_log[n_events, 3] = dd
+            n_events += 1
             if abs(d) > max_land:
                 max_land = abs(d)
             if disc[ev, 0] == 0.0:

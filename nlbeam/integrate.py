@@ -57,6 +57,9 @@ class Trajectory:
     t (n,) s; x, v (n, N) m and m/s; delta (n, n_elements) m, penetration (> 0 in contact);
     force (n, n_elements) N, element forces (>= 0 push out of the stop); n_impacts: contact
     onsets; state_end (2N,), disc_end (n_elements, 2) [in contact, delta'_minus] at t_end.
+    events (n, 4): [t (s), element, 1 onset / 0 end, delta' (m/s)] of each contact event (the
+    first ``event_log``); max_landing_residual: largest |delta| (m) at a located boundary.
+    xmax (N,): max |x_i| over the run, refined between steps on the quintic dense output.
     """
 
     t: np.ndarray
@@ -77,6 +80,9 @@ class Trajectory:
     min_steps_per_contact: int
     excitation: Excitation
     xmax: np.ndarray | None = None
+    events: np.ndarray | None = None
+    n_events: int = 0
+    max_landing_residual: float = 0.0
 
     @property
     def y(self):
@@ -159,7 +165,7 @@ def _initial(model, x0, disc0, t0, excitation):
 
 
 def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc,
-         events, want_var, P0, dvm0, track_xmax, store_every, graded=True):
+         events, want_var, P0, dvm0, track_xmax, store_every, graded=True, event_log=0):
     sysa = model.kernel_arrays()
     xc, xp, xtab = excitation.kernel_args()
     N = model.n_dof
@@ -180,12 +186,13 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
     xmax = np.zeros(N)
     counters = np.zeros(8, dtype=np.int64)
     fcounters = np.zeros(2)
+    ev_log = np.zeros((int(event_log), 4))
     h_init = min(dt, 1e-3 / max(excitation.max_frequency(), 1.0))
     status = _k.integrate_kernel(sysa, xc, xp, xtab, METHODS[method], float(t0), float(t_end),
                                  dt, spc, float(rtol), float(atol), h_init, int(max_steps),
                                  s0, disc, bool(events), bool(want_var), P0, dvm0,
                                  bool(track_xmax), int(store_every), bool(graded), out_t, out_s, out_d, out_f,
-                                 s_end, disc_end, P_end, dvm_end, xmax, counters, fcounters)
+                                 ev_log, s_end, disc_end, P_end, dvm_end, xmax, counters, fcounters)
     if status != 0:
         raise IntegrationError(_status_message(status, fcounters[0], method))
     n = counters[0]
@@ -193,13 +200,14 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
         warnings.warn(f"a contact was resolved with only {counters[5]} steps (< "
                       f"{MIN_STEPS_PER_CONTACT}): the result is inaccurate; reduce dt or raise "
                       "steps_per_contact", RuntimeWarning, stacklevel=3)
+    ev_log = ev_log[:min(int(counters[7]), ev_log.shape[0])]
     return (out_t[:n], out_s[:n], out_d[:n], out_f[:n], s_end, disc_end, P_end, dvm_end,
-            xmax, counters, fcounters)
+            xmax, counters, fcounters, ev_log)
 
 
 def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.0,
               disc0=None, store_every=1, steps_per_contact=None, rtol=1e-8, atol=1e-12,
-              events=True, graded=True, max_steps=100_000_000):
+              events=True, graded=True, event_log=10_000, max_steps=100_000_000):
     """Integrate ``model`` driven by ``excitation`` from t0 to t_end (s).
 
     method: 'rk2' (the paper's constant-step scheme, Heun), 'rk4', both with step ``dt`` (s)
@@ -211,6 +219,7 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
     contact uniformly in sqrt(t - t_onset) and its end uniformly in sqrt(delta), which keeps
     their order across the delta^1.5 singularity of Hertz-type contact forces. x0: initial state [x_1..x_N, v_1..v_N] (default: at rest).
     store_every: keep every k-th grid sample (0: none, only the end state).
+    event_log: how many contact events to record in ``Trajectory.events`` (memory bound).
     Returns a :class:`Trajectory`.
     """
     dt, spc = _prepare(model, excitation, method, dt, steps_per_contact, t0, t_end)
@@ -224,14 +233,15 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
     ne = model.n_elements
     P0 = np.zeros((2 * N, 1))
     dvm0 = np.zeros((ne, 1))
-    (t, S, D, F, s_end, disc_end, _, _, xmax, c, fc) = _run(
+    (t, S, D, F, s_end, disc_end, _, _, xmax, c, fc, evl) = _run(
         model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc, events,
-        False, P0, dvm0, True, store_every, graded)
+        False, P0, dvm0, True, store_every, graded, event_log)
     return Trajectory(t=t, x=S[:, :N], v=S[:, N:], delta=D, force=F, n_impacts=int(c[4]),
                       state_end=s_end, disc_end=disc_end, t_end=float(t_end), method=method,
                       dt=dt, steps_per_contact=spc, n_steps=int(c[1]), n_rejected=int(c[2]),
                       n_rhs=int(c[3]), min_steps_per_contact=int(c[5]), excitation=excitation,
-                      xmax=xmax)
+                      xmax=xmax, events=evl, n_events=int(c[7]),
+                      max_landing_residual=float(fc[1]))
 
 
 def flow(model, excitation, state0, t0, duration, *, monodromy=False, disc0=None,
@@ -265,7 +275,7 @@ def flow(model, excitation, state0, t0, duration, *, monodromy=False, disc0=None
     else:
         P0 = np.zeros((2 * N, 1))
         dvm0 = np.zeros((ne, 1))
-    (_, _, _, _, s_end, disc_end, P, dvm, xmax, c, fc) = _run(
+    (_, _, _, _, s_end, disc_end, P, dvm, xmax, c, fc, _) = _run(
         model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc, events,
         monodromy, P0, dvm0, True, 0, graded)
     if monodromy:

@@ -80,52 +80,17 @@ def block_moments(x, out):
 
 
 @njit(cache=True)
-def histogram_fixed(x, origin, width, i_lo, counts, outside):
-    """Count ``x`` into bins ``[origin + (i_lo + b) width, origin + (i_lo + b + 1) width)``.
+def histogram_count(x, edges, uniform, counts, outside):
+    """Count ``x`` into the bins of increasing ``edges`` (last bin closed, as np.histogram).
 
-    ``counts`` (n_bins,) and ``outside`` ([below, above]) are incremented in place. The
-    last bin is closed on the right (numpy convention). Edges are computed as
-    ``origin + i * width`` and every index is corrected against them, so a sample on an
-    edge lands in the bin np.histogram would give it.
+    ``counts`` (n_bins,) and ``outside`` ([below, above]) are incremented in place. For
+    (nearly) uniform edges the bin is guessed from the width and corrected against the
+    edges themselves; otherwise it is found by bisection.
     """
-    nb = counts.size
-    for j in range(x.size):
-        v = x[j]
-        if not math.isfinite(v):
-            return NON_FINITE
-        k = int(math.floor((v - origin) / width)) - i_lo
-        # correct rounding of the division against the edges themselves
-        if k >= 0 and k <= nb:
-            e_lo = origin + (i_lo + k) * width
-            if v < e_lo:
-                k -= 1
-            elif k < nb:
-                e_hi = origin + (i_lo + k + 1) * width
-                if v >= e_hi:
-                    k += 1
-        elif k == -1:
-            e_hi = origin + i_lo * width
-            if v >= e_hi:
-                k = 0
-        if k == nb:
-            e_top = origin + (i_lo + nb) * width
-            if v == e_top:
-                k = nb - 1
-        if k < 0:
-            outside[0] += 1
-        elif k >= nb:
-            outside[1] += 1
-        else:
-            counts[k] += 1
-    return OK
-
-
-@njit(cache=True)
-def histogram_edges(x, edges, counts, outside):
-    """Count ``x`` into arbitrary increasing ``edges`` (last bin closed); binary search."""
     nb = counts.size
     lo = edges[0]
     hi = edges[nb]
+    w = (hi - lo) / nb
     for j in range(x.size):
         v = x[j]
         if not math.isfinite(v):
@@ -137,15 +102,24 @@ def histogram_edges(x, edges, counts, outside):
         elif v == hi:
             counts[nb - 1] += 1
         else:
-            a = 0
-            b = nb
-            while b - a > 1:
-                m = (a + b) // 2
-                if v >= edges[m]:
-                    a = m
-                else:
-                    b = m
-            counts[a] += 1
+            if uniform:
+                k = int((v - lo) / w)
+                if k > nb - 1:
+                    k = nb - 1
+                while k > 0 and v < edges[k]:
+                    k -= 1
+                while k < nb - 1 and v >= edges[k + 1]:
+                    k += 1
+            else:
+                k = 0
+                b = nb
+                while b - k > 1:
+                    m = (k + b) // 2
+                    if v >= edges[m]:
+                        k = m
+                    else:
+                        b = m
+            counts[k] += 1
     return OK
 
 

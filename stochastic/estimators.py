@@ -173,7 +173,8 @@ def correlation_from_psd(psd, fs, nperseg, max_lag=None):
     """Autocorrelation coefficient rho(j / fs), j = 0 .. max_lag, from a Welch Hann PSD
     estimate: the inverse FFT of the averaged periodogram is the circular autocovariance
     weighted by the window's own autocorrelation, which is divided out. ``max_lag``
-    defaults to nperseg // 4 (window correlation >= 0.6 there)."""
+    defaults to nperseg // 4 (window correlation >= 0.6 there). The per-segment mean
+    removal biases rho by about -S1/nperseg (S1 = sum of rho over all lags)."""
     from scipy.signal import get_window
 
     w = get_window("hann", nperseg)
@@ -195,16 +196,17 @@ def correlation_from_psd(psd, fs, nperseg, max_lag=None):
 
 
 class StreamingHistogram:
-    """Histogram PDF with fixed bin width.
+    """Histogram PDF on fixed bin edges.
 
-    edges: explicit increasing bin edges, or None. bins: number of bins when the edges are
-    chosen from the first block: ``[min, max]`` of that block widened by ``margin`` of its
-    span on each side. on_outside: what to do with later samples outside the edges:
-    ``"extend"`` (default; add bins of the same width; only for uniform edges, at most
-    ``max_bins``, beyond which samples are counted as under/overflow with a warning),
-    ``"count"`` (count as under/overflow, warn when the result is read) or ``"raise"``.
-    The density is ``counts / (n_total * width)`` with ``n_total`` including under/overflow,
-    so it integrates to the fraction of samples inside the edges (reported).
+    edges: explicit increasing bin edges (kept exactly), or None. bins: number of bins when
+    the edges are chosen from the first block: ``[min, max]`` of that block widened by
+    ``margin`` of its span on each side. on_outside: what to do with later samples outside
+    the edges: ``"extend"`` (default; append bins of the same width, existing edges
+    unchanged; only for uniform edges, at most ``max_bins``, beyond which samples are
+    counted as under/overflow with a warning), ``"count"`` (count as under/overflow, warn
+    when the result is read) or ``"raise"``. The density is ``counts / (n_total * width)``
+    with ``n_total`` including under/overflow, so it integrates to the fraction of samples
+    inside the edges (reported).
     """
 
     def __init__(self, edges=None, *, bins=100, margin=0.25, on_outside="extend", max_bins=100_000):
@@ -212,84 +214,71 @@ class StreamingHistogram:
             raise ValueError(f"on_outside: must be one of 'extend', 'count', 'raise', got {on_outside!r}")
         self.on_outside = on_outside
         self.max_bins = int(max_bins)
-        self.bins = int(bins)
-        if self.bins < 1:
+        if isinstance(bins, bool) or not isinstance(bins, (int, np.integer)) or bins < 1:
             raise ValueError(f"bins: must be an integer >= 1, got {bins!r}")
+        self.bins = int(bins)
         self.margin = float(margin)
         if not (math.isfinite(self.margin) and self.margin >= 0):
             raise ValueError(f"margin: must be finite and >= 0, got {margin!r}")
         self.outside = np.zeros(2, dtype=np.int64)
         self.n_total = 0
         self._warned = False
-        self._edges = None  # for non-uniform edges
+        self._edges = None
         self.counts = None
         if edges is not None:
             e = np.asarray(edges, dtype=float)
             if e.ndim != 1 or e.size < 2 or not np.all(np.isfinite(e)) or np.any(np.diff(e) <= 0):
                 raise ValueError("edges: must be a finite, strictly increasing 1-D array of length >= 2")
-            widths = np.diff(e)
-            if np.allclose(widths, widths[0], rtol=1e-12, atol=0):
-                self._set_uniform(e[0], widths[0], 0, e.size - 1)
-            else:
-                self._edges = e
-                self.counts = np.zeros(e.size - 1, dtype=np.int64)
+            self._set(e.copy())
 
-    def _set_uniform(self, origin, width, i_lo, nb):
-        self.origin = float(origin)
-        self.width = float(width)
-        self.i_lo = int(i_lo)
-        self.counts = np.zeros(nb, dtype=np.int64)
-
-    @property
-    def uniform(self) -> bool:
-        return self._edges is None
+    def _set(self, e):
+        self._edges = e
+        wd = np.diff(e)
+        self.uniform = bool(np.allclose(wd, wd.mean(), rtol=1e-9, atol=0))
+        self.width = float(wd.mean())
+        if self.counts is None:
+            self.counts = np.zeros(e.size - 1, dtype=np.int64)
 
     @property
     def edges(self):
-        """Bin edges."""
-        if self.counts is None:
+        """Bin edges (units of the data)."""
+        if self._edges is None:
             raise ValueError("x: no data yet; edges are chosen from the first block")
-        if self._edges is not None:
-            return self._edges
-        return self.origin + (self.i_lo + np.arange(self.counts.size + 1)) * self.width
+        return self._edges
 
     def update(self, x):
         """Count the samples ``x``."""
         x = _as_block("x", x)
         if x.size == 0:
             return self
-        if self.counts is None:
+        if self._edges is None:
             lo, hi = float(x.min()), float(x.max())
             span = hi - lo
             if span == 0:
                 span = abs(lo) if lo != 0 else 1.0
             lo -= self.margin * span
             hi += self.margin * span
-            self._set_uniform(lo, (hi - lo) / self.bins, 0, self.bins)
+            self._set(np.linspace(lo, hi, self.bins + 1))
         if self.uniform and self.on_outside == "extend":
             self._extend_to(float(x.min()), float(x.max()))
         out = np.zeros(2, dtype=np.int64)
-        if self.uniform:
-            st = _kernels.histogram_fixed(x, self.origin, self.width, self.i_lo, self.counts, out)
-        else:
-            st = _kernels.histogram_edges(x, self._edges, self.counts, out)
+        st = _kernels.histogram_count(x, self._edges, self.uniform, self.counts, out)
         if st != 0:  # pragma: no cover - checked above
             raise ValueError("x: contains non-finite samples")
         if out.sum() and self.on_outside == "raise":
             raise ValueError(f"x: {int(out.sum())} samples outside the histogram edges "
-                             f"[{self.edges[0]:.6g}, {self.edges[-1]:.6g}] (on_outside='raise')")
+                             f"[{self._edges[0]:.6g}, {self._edges[-1]:.6g}] (on_outside='raise')")
         self.outside += out
         self.n_total += x.size
         return self
 
     def _extend_to(self, xmin, xmax):
-        nb = self.counts.size
-        lo_idx = math.floor((xmin - self.origin) / self.width) - 1
-        hi_idx = math.floor((xmax - self.origin) / self.width) + 1
-        add_lo = max(self.i_lo - lo_idx, 0)
-        add_hi = max(hi_idx + 1 - (self.i_lo + nb), 0)
+        e, w = self._edges, self.width
+        add_lo = int(math.ceil((e[0] - xmin) / w)) + 1 if xmin < e[0] else 0
+        add_hi = int(math.ceil((xmax - e[-1]) / w)) + 1 if xmax > e[-1] else 0
         if add_lo == 0 and add_hi == 0:
             return
+        nb = self.counts.size
         if nb + add_lo + add_hi > self.max_bins:
             if not self._warned:
                 warnings.warn(f"histogram: extending to [{xmin:.6g}, {xmax:.6g}] would need "
@@ -297,8 +286,9 @@ class StreamingHistogram:
                               f"outside are counted as under/overflow", RuntimeWarning, stacklevel=3)
                 self._warned = True
             return
+        new = np.concatenate([e[0] - w * np.arange(add_lo, 0, -1), e, e[-1] + w * np.arange(1, add_hi + 1)])
         self.counts = np.concatenate([np.zeros(add_lo, np.int64), self.counts, np.zeros(add_hi, np.int64)])
-        self.i_lo -= add_lo
+        self._edges = new
 
     def result(self, n_eff=None) -> dict:
         """centres, density (1/units), edges, counts, under/overflow, fraction inside, and
@@ -307,18 +297,18 @@ class StreamingHistogram:
         records)."""
         if self.counts is None or self.n_total == 0:
             raise ValueError("x: no data fed to the histogram")
-        e = self.edges
+        e = self._edges
         w = np.diff(e)
         n = self.n_total
         p = self.counts / n
         dens = p / w
         neff = float(n if n_eff is None else n_eff)
         n_out = int(self.outside.sum())
-        if n_out and not self._warned and self.on_outside != "extend":
+        if n_out and not self._warned:
             warnings.warn(f"histogram: {n_out} of {n} samples fell outside the edges "
                           f"(below {int(self.outside[0])}, above {int(self.outside[1])})",
                           RuntimeWarning, stacklevel=2)
-        return {"centres": 0.5 * (e[1:] + e[:-1]), "density": dens, "edges": e,
+        return {"centres": 0.5 * (e[1:] + e[:-1]), "density": dens, "edges": e.copy(),
                 "counts": self.counts.copy(), "n_total": n, "n_below": int(self.outside[0]),
                 "n_above": int(self.outside[1]), "fraction_inside": 1.0 - n_out / n,
                 "density_se": np.sqrt(p * (1 - p) / neff) / w, "n_eff": neff}

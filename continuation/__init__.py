@@ -1,0 +1,10 @@
+"""continuation: periodic solutions, their stability and frequency-response diagrams.
+
+Front door: ``periodic_solution`` (shooting), ``frequency_response`` and ``continue_parameter``
+(pseudo-arclength path following with bifurcation detection), ``load``. Plotting lives in
+``continuation.plot`` (imports matplotlib); HDF5 I/O imports h5py only when called.
+"""
+from ._newton import ConvergenceError
+from .shooting import Integrator, PeriodicSolution, periodic_solution
+
+__all__ = ["periodic_solution", "PeriodicSolution", "Integrator", "ConvergenceError"]

@@ -1,0 +1,248 @@
+"""Pseudo-arclength continuation with bifurcation detection, over a small protocol.
+
+A problem offers ``evaluate(u, p, jac, jac_p) -> Evaluation(R, Ju, Jp, Ms, xmax)``,
+``scale_u`` (n,), ``scale_p``, ``multipliers(Ms)``, ``solve(u, p)`` and ``adapt(u, p)``
+(None, or a new problem and u after the unknowns were redefined, e.g. segment boundaries moved)
+with ``transfer(old_problem, u, p)``. Work is done in scaled variables (u / scale_u, p / scale_p).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._newton import ConvergenceError
+
+KINDS = ("fold", "period-doubling", "neimark-sacker")
+
+
+@dataclass
+class Point:
+    u: np.ndarray
+    p: float
+    xmax: float
+    multipliers: np.ndarray
+    problem: object
+
+
+@dataclass
+class Located:
+    """A bifurcation located on a traced branch. tolerance: width of the final bracket in p."""
+
+    kind: str
+    point: Point
+    tolerance: float
+    index: int  # the branch point before it
+
+
+def test_functions(mu):
+    """(fold, period-doubling, Neimark-Sacker) test functions of the multipliers: each changes
+    sign when a multiplier crosses +1, -1, or a complex pair the unit circle."""
+    mu = np.asarray(mu)
+    tf = float(np.prod(mu - 1.0).real)
+    tpd = float(np.prod(mu + 1.0).real)
+    n = len(mu)
+    tns = 1.0
+    for i in range(n):
+        for j in range(i + 1, n):
+            tns *= (mu[i] * mu[j] - 1.0).real if abs(mu[i].imag) > 0 and np.isclose(
+                mu[i], np.conj(mu[j])) else 1.0
+    return np.array([tf, tpd, tns])
+
+
+def _scaled(ev, w, wp):
+    J = np.hstack([ev.Ju * w[None, :], (ev.Jp * wp)[:, None]]) / w[:, None]
+    return ev.R / w, J
+
+
+def tangent(J, t_prev):
+    """Unit null vector of J (n, n+1) with a positive projection on t_prev."""
+    A = np.vstack([J, t_prev[None, :]])
+    b = np.zeros(A.shape[0])
+    b[-1] = 1.0
+    t = np.linalg.solve(A, b)
+    return t / np.linalg.norm(t)
+
+
+class Tracer:
+    """Follows one branch. Options: p_min, p_max (stop outside), ds (initial step, scaled),
+    ds_min, ds_max, max_angle (rad, between successive tangents), max_points, tol (corrector,
+    scaled residual), bif_tol (relative width in p of the bracket of a located bifurcation),
+    detect (bool)."""
+
+    def __init__(self, *, p_min=-np.inf, p_max=np.inf, ds=0.02, ds_min=1e-7, ds_max=0.1,
+                 max_angle=0.15, max_points=3000, tol=1e-10, bif_tol=1e-10, detect=True,
+                 max_iter=8):
+        self.p_min, self.p_max = p_min, p_max
+        self.ds0, self.ds_min, self.ds_max = ds, ds_min, ds_max
+        self.max_angle = max_angle
+        self.max_points = max_points
+        self.tol = tol
+        self.bif_tol = bif_tol
+        self.detect = detect
+        self.max_iter = max_iter
+        self.n_evaluations = 0
+
+    # --- corrector ------------------------------------------------------------------------------
+    def correct(self, prob, zeta_pred, t):
+        """Solve R = 0 with t . (zeta - zeta_pred) = 0; returns (zeta, evaluation, iterations)."""
+        w, wp = prob.scale_u, prob.scale_p
+        z = zeta_pred.copy()
+        for it in range(1, self.max_iter + 1):
+            ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=True, jac_p=True)
+            self.n_evaluations += 1
+            r, J = _scaled(ev, w, wp)
+            G = np.r_[r, t @ (z - zeta_pred)]
+            if not np.all(np.isfinite(G)):
+                break
+            A = np.vstack([J, t[None, :]])
+            try:
+                dz = np.linalg.solve(A, -G)
+            except np.linalg.LinAlgError:
+                break
+            z = z + dz
+            if np.max(np.abs(dz)) < 1e-3 * self.tol or (np.max(np.abs(r)) < self.tol and
+                                                          np.max(np.abs(dz)) < 1e-6):
+                ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=True, jac_p=True)
+                self.n_evaluations += 1
+                r, J = _scaled(ev, w, wp)
+                if np.max(np.abs(r)) < self.tol * 10:
+                    return z, ev, it
+                continue
+        raise ConvergenceError("corrector did not converge; try a smaller step (ds) or multiple "
+                               "shooting (segments=4)")
+
+    def _point(self, prob, z, ev):
+        u = z[:-1] * prob.scale_u
+        return Point(u=u, p=float(z[-1] * prob.scale_p), xmax=ev.xmax,
+                     multipliers=prob.multipliers(ev.Ms), problem=prob)
+
+    # --- one branch ---------------------------------------------------------------------------
+    def trace(self, prob, u0, p0, direction=1, stop=None, t0=None):
+        """Follow the branch through the solution (u0, p0) in the direction of increasing p
+        (direction=1) or decreasing p (-1), or along t0 (scaled tangent) if given.
+        ``stop(point) -> bool`` ends the branch. Returns (points, located, reason)."""
+        w, wp = prob.scale_u, prob.scale_p
+        z = np.r_[np.asarray(u0) / w, p0 / wp]
+        ev = prob.evaluate(u0, p0, jac=True, jac_p=True)
+        self.n_evaluations += 1
+        r, J = _scaled(ev, w, wp)
+        e_p = np.zeros(len(z))
+        e_p[-1] = float(direction)
+        t = tangent(J, e_p if t0 is None else t0)
+        pts = [self._point(prob, z, ev)]
+        tfs = [test_functions(pts[0].multipliers)]
+        located = []
+        ds = self.ds0
+        z_first, t_first = z.copy(), t.copy()
+        reason = "max_points"
+        while len(pts) < self.max_points:
+            try:
+                zn, evn, iters = self.correct(prob, z + ds * t, t)
+                rn, Jn = _scaled(evn, w, wp)
+                tn = tangent(Jn, t)
+                ok = np.arccos(np.clip(t @ tn, -1, 1)) <= self.max_angle
+            except ConvergenceError:
+                ok = False
+                iters = self.max_iter
+            if not ok:
+                ds *= 0.5
+                if ds < self.ds_min:
+                    reason = "step underflow"
+                    break
+                continue
+            pt = self._point(prob, zn, evn)
+            tf = test_functions(pt.multipliers)
+            if stop is not None and stop(pt):
+                pts.append(pt)
+                tfs.append(tf)
+                reason = "stop"
+                break
+            if self.detect:
+                for k, kind in enumerate(KINDS):
+                    if np.sign(tf[k]) != np.sign(tfs[-1][k]) and tf[k] != 0:
+                        if kind == "neimark-sacker" and not _has_pair_near_circle(
+                                pts[-1].multipliers, pt.multipliers):
+                            continue
+                        loc = self.locate(prob, z, t, ds, k, tfs[-1][k], tf[k])
+                        if loc is not None:
+                            located.append(Located(kind, loc[0], loc[1], len(pts) - 1))
+            pts.append(pt)
+            tfs.append(tf)
+            z, t = zn, tn
+            if not (self.p_min <= pt.p <= self.p_max):
+                reason = "left the parameter range"
+                break
+            if len(pts) > 8 and np.linalg.norm(z - z_first) < 1.5 * ds and t @ t_first > 0.5:
+                reason = "closed"
+                break
+            ds = min(self.ds_max, ds * (1.6 if iters <= 2 else (1.0 if iters <= 4 else 0.6)))
+            new = prob.adapt(pt.u, pt.p)
+            if new is not None:
+                prob2, u2 = new
+                try:
+                    u2, ev2, _, _ = prob2.solve(u2, pt.p, tol=self.tol)
+                except ConvergenceError:
+                    reason = "could not move the segment boundaries"
+                    break
+                w, wp = prob2.scale_u, prob2.scale_p
+                z_prev_new = np.r_[prob2.transfer(pts[-2].problem, pts[-2].u, pts[-2].p) / w,
+                                   pts[-2].p / wp]
+                z = np.r_[u2 / w, pt.p / wp]
+                ev2 = prob2.evaluate(u2, pt.p, jac=True, jac_p=True)
+                r2, J2 = _scaled(ev2, w, wp)
+                sec = z - z_prev_new
+                t = tangent(J2, sec / np.linalg.norm(sec))
+                pts[-1] = self._point(prob2, z, ev2)
+                z_first = np.r_[prob2.transfer(pts[0].problem, pts[0].u, pts[0].p) / w,
+                                pts[0].p / wp]
+                t_first = t if len(pts) < 3 else t_first * 0 + t  # orientation reference reset
+                prob = prob2
+        return pts, located, reason
+
+    # --- bifurcation location -----------------------------------------------------------------
+    def locate(self, prob, z_a, t_a, ds, k, g_a, g_b):
+        """Illinois regula falsi on the arclength step from z_a (test function k), until the
+        bracket's width in p is below bif_tol * |p|. Returns (Point, tolerance) or None."""
+        lo, hi = 0.0, ds
+        glo, ghi = g_a, g_b
+        p_lo = z_a[-1] * prob.scale_p
+        zb, _, _ = None, None, None
+        best = None
+        p_hi = None
+        side = 0
+        for _ in range(60):
+            s = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
+            if not (lo < s < hi):
+                s = 0.5 * (lo + hi)
+            try:
+                zs, evs, _ = self.correct(prob, z_a + s * t_a, t_a)
+            except ConvergenceError:
+                return None
+            pt = self._point(prob, zs, evs)
+            g = test_functions(pt.multipliers)[k]
+            best = pt
+            if np.sign(g) == np.sign(glo):
+                lo, glo, p_lo = s, g, pt.p
+                if side == -1:
+                    ghi *= 0.5
+                side = -1
+            else:
+                hi, ghi, p_hi = s, g, pt.p
+                if side == 1:
+                    glo *= 0.5
+                side = 1
+            if p_hi is not None and abs(p_hi - p_lo) <= self.bif_tol * max(abs(pt.p), 1e-300):
+                break
+            if g == 0 or hi - lo < 1e-15:
+                break
+        tol = abs(p_hi - p_lo) if p_hi is not None else np.inf
+        return best, tol
+
+
+def _has_pair_near_circle(mu_a, mu_b):
+    for mu in (mu_a, mu_b):
+        c = mu[np.abs(mu.imag) > 1e-9 * np.abs(mu)]
+        if c.size and np.any(np.abs(np.abs(c) - 1) < 0.5):
+            return True
+    return False

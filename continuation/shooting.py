@@ -1,0 +1,446 @@
+"""Periodic solutions by (multiple) shooting on the flow of an nlbeam model.
+
+A periodic orbit of order n (period T = n / f) is described by the states ``U[j]`` at m
+segment boundaries, given as excitation phases ``b_j`` (in excitation periods, increasing,
+b_0 in [0, n), the last segment ends at b_0 + n). The residual is ``R_j = phi_j(U_j) - U_{j+1}``;
+its Jacobian holds the segment monodromies from the variational equations (nlbeam.flow).
+
+Boundaries are placed where the orbit is out of contact (the Lankarani-Nikravesh law's
+onset-velocity memory is then not part of the state) and moved when the orbit comes close;
+the solution is reported at t = 0 by integrating from b_0.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+import nlbeam
+
+from ._newton import ConvergenceError, newton
+
+# steps per excitation period of the fixed-step methods at the nlbeam default dt (f >= f_n)
+_BASE_STEPS = {"rk2": 400, "rk4": 100}
+
+
+@dataclass(frozen=True)
+class Integrator:
+    """How orbits are integrated. method: 'rk4', 'rk2' or 'adaptive' (rtol, atol).
+    dt_scale: the fixed step as a fraction of nlbeam's default (1: default; 0.5: half the step).
+    The number of steps per excitation period is kept fixed in steps of powers of two, so the
+    discrete flow map is smooth along a branch. steps_per_contact: as in nlbeam.flow."""
+
+    method: str = "rk4"
+    dt_scale: float = 1.0
+    steps_per_contact: float | None = None
+    rtol: float = 1e-10
+    atol: float = 1e-14
+
+    def __post_init__(self):
+        if self.method not in ("rk4", "rk2", "adaptive"):
+            raise ValueError(f"method: must be 'rk4', 'rk2' or 'adaptive', got {self.method!r}")
+        if not (math.isfinite(self.dt_scale) and self.dt_scale > 0):
+            raise ValueError(f"dt_scale: must be finite and > 0, got {self.dt_scale!r}")
+
+    def steps_per_period(self, model, frequency):
+        """Steps per excitation period at frequency (Hz) for fixed-step methods (0: adaptive)."""
+        if self.method == "adaptive":
+            return 0
+        fn = float(np.max(model.natural_frequencies()))
+        ratio = max(1.0, fn / frequency)
+        level = 2 ** int(math.ceil(math.log2(ratio) - 1e-12))
+        return int(math.ceil(_BASE_STEPS[self.method] * level / self.dt_scale))
+
+
+def event_elements(model):
+    """Indices of the elements with a contact boundary (stops with nonzero stiffness)."""
+    idx = []
+    for i, el in enumerate(model.system.elements):
+        if isinstance(el, nlbeam.Contact) and el.K > 0:
+            idx.append(i)
+        elif isinstance(el, nlbeam.PiecewiseLinearStop) and el.k > 0:
+            idx.append(i)
+    return idx
+
+
+def clearance(model, states, y):
+    """-max_e delta_e (m) of each state (rows) for base/force value(s) y: > 0 out of contact,
+    +inf when the model has no contact elements."""
+    states = np.atleast_2d(states)
+    idx = event_elements(model)
+    if not idx:
+        return np.full(states.shape[0], np.inf)
+    arr = model.kernel_arrays()  # (.., ew [5], ewy [6], egap [7], ..): delta = w.x + wy y - gap
+    N = model.n_dof
+    d = states[:, :N] @ arr[5][idx].T + np.outer(np.atleast_1d(y), arr[6][idx]) - arr[7][idx]
+    return -np.max(d, axis=1)
+
+
+class ShootingProblem:
+    """The periodic-orbit problem R(u, p) = 0 of one model, excitation amplitude and order.
+
+    parameter: 'frequency' (Hz), 'amplitude' (m or N), or the name of a model field
+    (dataclasses.replace is used: 'e', 'K_hertz', ...). ``fixed`` holds the values of the other
+    two of (frequency, amplitude). boundaries: excitation phases of the segment starts.
+    Protocol used by the path follower: ``evaluate``, ``n``, ``scale_u``, ``scale_p``,
+    ``multipliers``, ``xmax``, ``adapt``.
+    """
+
+    def __init__(self, model, amplitude, frequency, order, boundaries, integrator,
+                 parameter="frequency", steps_per_period=None, scale_u=None, scale_p=None):
+        self.base_model = model
+        self.amplitude = float(amplitude)
+        self.frequency = float(frequency)
+        self.order = int(order)
+        self.boundaries = np.asarray(boundaries, dtype=float)
+        self.integrator = integrator
+        self.parameter = parameter
+        self.n_seg = len(self.boundaries)
+        self.N2 = 2 * model.n_dof
+        self.n = self.N2 * self.n_seg
+        self.out = model.output_dof
+        self._cache = (None, None)
+        p0 = self.value()
+        if steps_per_period is None:
+            m, A, f = self.setup(p0)
+            steps_per_period = integrator.steps_per_period(m, f)
+        self.steps_per_period = int(steps_per_period)
+        self.scale_u = scale_u
+        self.scale_p = float(scale_p) if scale_p is not None else max(abs(p0), 1e-300)
+        self.sel_clearance = None
+
+    # --- parameters ---------------------------------------------------------------------------
+    def value(self):
+        """The current value of the continuation parameter."""
+        if self.parameter == "frequency":
+            return self.frequency
+        if self.parameter == "amplitude":
+            return self.amplitude
+        return float(getattr(self.base_model, self.parameter))
+
+    def setup(self, p):
+        """(model, amplitude, frequency) at parameter value p."""
+        if self.parameter == "frequency":
+            return self.base_model, self.amplitude, float(p)
+        if self.parameter == "amplitude":
+            return self.base_model, float(p), self.frequency
+        key, m = self._cache
+        if key != p:
+            m = dataclasses.replace(self.base_model, **{self.parameter: float(p)})
+            self._cache = (p, m)
+        return m, self.amplitude, self.frequency
+
+    # --- segments -----------------------------------------------------------------------------
+    def _segments(self, f):
+        b = np.append(self.boundaries, self.boundaries[0] + self.order)
+        for j in range(self.n_seg):
+            dphi = b[j + 1] - b[j]
+            t0 = b[j] / f
+            dur = dphi / f
+            if self.steps_per_period:
+                nsteps = max(1, int(round(self.steps_per_period * dphi)))
+                dt = dur / nsteps
+            else:
+                dt = dur
+            yield j, t0, dur, dt
+
+    def _flow(self, model, ex, s, t0, dur, dt, mono):
+        it = self.integrator
+        return nlbeam.flow(model, ex, s, t0, dur, monodromy=mono, method=it.method, dt=dt,
+                           steps_per_contact=it.steps_per_contact, rtol=it.rtol, atol=it.atol)
+
+    def _map(self, U, p, mono):
+        """Flows of all segments at parameter p: (ends (m, 2N), [monodromies], xmax)."""
+        model, A, f = self.setup(p)
+        ex = nlbeam.Harmonic(A, f)
+        ends = np.empty_like(U)
+        Ms = []
+        xm = 0.0
+        N = model.n_dof
+        for j, t0, dur, dt in self._segments(f):
+            fl = self._flow(model, ex, U[j], t0, dur, dt, mono)
+            ends[j] = fl.state
+            xm = max(xm, float(fl.xmax[self.out]))
+            if mono:
+                M = fl.monodromy
+                if fl.dstate_dvminus0 is not None:
+                    # started inside a contact: the memory was taken as the penetration rate
+                    # at the start (nlbeam's rule), a function of the state: chain it in
+                    arr = model.kernel_arrays()
+                    D = np.zeros((model.n_elements, self.N2))
+                    D[:, N:] = arr[5]
+                    M = M + fl.dstate_dvminus0 @ D
+                Ms.append(M)
+        return ends, Ms, xm
+
+    def evaluate(self, u, p, jac=True, jac_p=True):
+        """Residual R (n,) of u (n,) at parameter p; with jac the Jacobian dR/du (n, n) and the
+        monodromies of the segments; with jac_p dR/dp (n,) by central differences."""
+        U = np.asarray(u, dtype=float).reshape(self.n_seg, self.N2)
+        ends, Ms, xm = self._map(U, p, jac)
+        R = (ends - np.roll(U, -1, axis=0)).ravel()
+        Ju = None
+        if jac:
+            Ju = np.zeros((self.n, self.n))
+            k = self.N2
+            for j in range(self.n_seg):
+                Ju[j * k:(j + 1) * k, j * k:(j + 1) * k] += Ms[j]
+                jn = (j + 1) % self.n_seg
+                Ju[j * k:(j + 1) * k, jn * k:(jn + 1) * k] -= np.eye(k)
+        Jp = None
+        if jac_p:
+            h = 1e-6 * self.scale_p
+            e_hi = self._map(U, p + h, False)[0]
+            e_lo = self._map(U, p - h, False)[0]
+            Jp = ((e_hi - e_lo) / (2 * h)).ravel()
+        return Evaluation(R, Ju, Jp, Ms, xm)
+
+    # --- derived quantities -----------------------------------------------------------------
+    def monodromy(self, Ms):
+        M = np.eye(self.N2)
+        for Mj in Ms:
+            M = Mj @ M
+        return M
+
+    def multipliers(self, Ms):
+        mu = np.linalg.eigvals(self.monodromy(Ms))
+        return mu[np.argsort(-np.abs(mu), kind="stable")]
+
+    def boundary_clearance(self, u, p):
+        model, A, f = self.setup(p)
+        U = np.asarray(u).reshape(self.n_seg, self.N2)
+        y = nlbeam.Harmonic(A, f).evaluate(self.boundaries / f)[0]
+        return clearance(model, U, y)
+
+    def make_scale(self, u):
+        U = np.abs(np.asarray(u).reshape(self.n_seg, self.N2))
+        N = self.N2 // 2
+        sx = max(float(U[:, :N].max()), 1e-300)
+        sv = max(float(U[:, N:].max()), 1e-300)
+        return np.tile(np.r_[np.full(N, sx), np.full(N, sv)], self.n_seg)
+
+    def solve(self, u0, p, tol=1e-10, max_iter=12):
+        """Newton at fixed p. Returns (u, evaluation, residual, iterations)."""
+        if self.scale_u is None:
+            self.scale_u = self.make_scale(u0)
+        w = self.scale_u
+
+        def fun(z):
+            ev = self.evaluate(z * w, p, jac=True, jac_p=False)
+            return ev.R / w, ev.Ju * w[None, :] / w[:, None]
+
+        z, res, it = newton(fun, np.asarray(u0) / w, tol=tol, max_iter=max_iter,
+                            what=f"shooting (order {self.order}, {self.parameter} = {p:.9g})")
+        u = z * w
+        return u, self.evaluate(u, p, jac=True, jac_p=False), res, it
+
+    # --- boundaries ---------------------------------------------------------------------------
+    def trajectory(self, u, p, n_samples=None):
+        """Integrate one period from the first boundary, storing samples (nlbeam.Trajectory)."""
+        model, A, f = self.setup(p)
+        ex = nlbeam.Harmonic(A, f)
+        U = np.asarray(u).reshape(self.n_seg, self.N2)
+        t0 = self.boundaries[0] / f
+        T = self.order / f
+        it = self.integrator
+        if self.steps_per_period:
+            dt = 1.0 / (f * self.steps_per_period)
+        else:
+            dt = T / (n_samples or 400 * self.order)
+        return nlbeam.integrate(model, ex, t0 + T, method=it.method, dt=dt, x0=U[0], t0=t0,
+                                steps_per_contact=it.steps_per_contact, rtol=it.rtol,
+                                atol=it.atol)
+
+    def rephased(self, u, p, n_seg=None):
+        """A problem with boundaries moved into free flight (as far from the stops as possible,
+        spread over the period), and its u from an integration of the orbit."""
+        n_seg = n_seg or self.n_seg
+        model, A, f = self.setup(p)
+        tr = self.trajectory(u, p)
+        t, S = tr.t[:-1], np.hstack([tr.x, tr.v])[:-1]
+        y = tr.excitation.evaluate(t)[0]
+        c = clearance(model, S, y)
+        T = self.order / f
+        t0 = t[0]
+        if not np.isfinite(c[0]):
+            idx = [int(round(j * len(t) / n_seg)) for j in range(n_seg)]
+        else:
+            idx = []
+            # window j covers [t0 + j T/m, t0 + (j+1) T/m): best clearance inside each
+            k0 = int(np.argmax(c))
+            shift = t[k0] - t0
+            for j in range(n_seg):
+                lo = t0 + shift + (j - 0.5) * T / n_seg
+                hi = lo + T / n_seg
+                tt = (t - lo) % T + lo  # periodic position
+                mask = (tt >= lo) & (tt < hi)
+                cand = np.nonzero(mask)[0]
+                k = cand[np.argmax(c[cand])] if cand.size else k0
+                idx.append(int(k))
+            idx = sorted(set(idx), key=lambda k: (t[k] - t[k0]) % T)
+        ph = t[idx] * f % self.order
+        order = np.argsort(ph)
+        ph = ph[order]
+        idx = [idx[i] for i in order]
+        new = ShootingProblem(self.base_model, self.amplitude, self.frequency, self.order, ph,
+                              self.integrator, parameter=self.parameter,
+                              steps_per_period=self.steps_per_period, scale_p=self.scale_p)
+        unew = S[idx].ravel()
+        new.scale_u = new.make_scale(unew)
+        new.sel_clearance = c[idx] if np.isfinite(c[0]) else None
+        return new, unew
+
+    def needs_rephase(self, u, p):
+        if self.sel_clearance is None:
+            return False
+        c = self.boundary_clearance(u, p)
+        return bool(np.any(c < 0.3 * self.sel_clearance))
+
+    def state_at_zero(self, u, p):
+        """(state, disc) at t = 0 (excitation phase zero) of the orbit u."""
+        model, A, f = self.setup(p)
+        U = np.asarray(u).reshape(self.n_seg, self.N2)
+        b = np.append(self.boundaries, self.boundaries[0] + self.order)
+        target = float(self.order)
+        for j in range(self.n_seg):
+            if abs(b[j] - target) < 1e-13 * self.order or abs(b[j]) < 1e-13 * self.order:
+                return U[j].copy(), None
+            if b[j] <= target < b[j + 1]:
+                fl = None
+                dphi = target - b[j]
+                it = self.integrator
+                dt = (dphi / f) / max(1, int(round(self.steps_per_period * dphi))) \
+                    if self.steps_per_period else dphi / f
+                fl = nlbeam.flow(model, nlbeam.Harmonic(A, f), U[j], b[j] / f, dphi / f,
+                                 method=it.method, dt=dt, steps_per_contact=it.steps_per_contact,
+                                 rtol=it.rtol, atol=it.atol)
+                return fl.state, fl.disc
+        return U[0].copy(), None
+
+
+@dataclass
+class Evaluation:
+    R: np.ndarray
+    Ju: np.ndarray | None
+    Jp: np.ndarray | None
+    Ms: list
+    xmax: float
+
+
+@dataclass
+class PeriodicSolution:
+    """A periodic solution of order n (period n / f).
+
+    state0 (2N,): state at t = 0 (excitation phase zero); disc0: its contact state (None if out
+    of contact); period (s); frequency (Hz); amplitude (m, or N for force excitation); xmax (m):
+    max |x| of the output DOF over the period, of the continuous orbit (refined between steps);
+    multipliers (2N,) complex, sorted by modulus, largest first (None if not asked);
+    stable: all |multiplier| < 1; residual: max-norm of the scaled shooting residual;
+    iterations: Newton iterations; boundaries: the excitation phases (periods) of the shooting
+    segments; states (m, 2N): the states there; monodromy (2N, 2N) at the first boundary."""
+
+    state0: np.ndarray
+    disc0: np.ndarray | None
+    order: int
+    frequency: float
+    amplitude: float
+    period: float
+    xmax: float
+    multipliers: np.ndarray | None
+    stable: bool | None
+    residual: float
+    iterations: int
+    boundaries: np.ndarray
+    states: np.ndarray
+    monodromy: np.ndarray | None
+
+
+def decay_rate(model):
+    """Slowest decay rate (1/s) of the linear structure (without the nonlinear elements)."""
+    sysm = model.system
+    N = model.n_dof
+    Minv = np.linalg.inv(sysm.M)
+    A = np.block([[np.zeros((N, N)), np.eye(N)], [-Minv @ sysm.K, -Minv @ sysm.C]])
+    lam = np.linalg.eigvals(A)
+    return max(float(np.min(-lam.real)), 1e-6)
+
+
+def steady_state(model, amplitude, frequency, *, x0=None, efolds=8.0, min_periods=50,
+                 integrator=Integrator(), max_periods=20000):
+    """Integrate from x0 (default rest) at t = 0 over a whole number of excitation periods
+    (about ``efolds`` decay times of the linear structure). Returns the state at the end, at
+    excitation phase zero."""
+    n = int(min(max_periods, max(min_periods, math.ceil(efolds / decay_rate(model) * frequency))))
+    spp = integrator.steps_per_period(model, frequency)
+    dt = 1.0 / (frequency * spp) if spp else 1.0 / frequency
+    tr = nlbeam.integrate(model, nlbeam.Harmonic(amplitude, frequency), n / frequency,
+                          method=integrator.method, dt=dt, x0=x0, store_every=0,
+                          steps_per_contact=integrator.steps_per_contact,
+                          rtol=integrator.rtol, atol=integrator.atol)
+    return tr.state_end
+
+
+def _problem_from_state(model, amplitude, frequency, order, state0, segments, integrator):
+    """A shooting problem with boundaries in free flight, from a state at t = 0."""
+    base = ShootingProblem(model, amplitude, frequency, order, [0.0], integrator)
+    return base.rephased(np.asarray(state0, dtype=float), frequency, n_seg=segments)
+
+
+def periodic_solution(model, amplitude, frequency, order=1, guess=None, *, segments=1,
+                      integrator=None, tol=1e-10, max_iter=15, stability=True, **integrator_kw):
+    """Periodic solution of order n (period n / frequency) by (multiple) shooting.
+
+    amplitude: m (base excitation) or N (force); frequency: Hz. guess: state at t = 0 (2N,) or
+    a PeriodicSolution; without it the model is integrated to a steady state first.
+    segments: shooting segments per period (multiple shooting). Newton's Jacobian holds the
+    monodromies from the variational equations. stability=False skips the multipliers.
+    Integrator options (method, dt_scale, steps_per_contact, rtol, atol) may be passed as
+    keywords or as an ``Integrator``. Raises ConvergenceError when Newton does not converge.
+    """
+    if integrator is None:
+        integrator = Integrator(**integrator_kw)
+    if not (math.isfinite(frequency) and frequency > 0):
+        raise ValueError(f"frequency: must be finite and > 0 Hz, got {frequency!r}")
+    if int(order) != order or order < 1:
+        raise ValueError(f"order: must be an integer >= 1, got {order!r}")
+    if int(segments) != segments or segments < 1:
+        raise ValueError(f"segments: must be an integer >= 1, got {segments!r}")
+    if guess is None:
+        s0 = steady_state(model, amplitude, frequency, integrator=integrator)
+    elif isinstance(guess, PeriodicSolution):
+        s0 = guess.state0
+    else:
+        s0 = np.asarray(guess, dtype=float).ravel()
+        if s0.shape != (2 * model.n_dof,):
+            raise ValueError(f"guess: must be a state of length {2 * model.n_dof} or a "
+                             "PeriodicSolution")
+    prob, u0 = _problem_from_state(model, amplitude, frequency, order, s0, segments, integrator)
+    return solve_problem(prob, u0, frequency if prob.parameter == "frequency" else prob.value(),
+                         tol=tol, max_iter=max_iter, stability=stability)
+
+
+def solve_problem(prob, u0, p, *, tol=1e-10, max_iter=15, stability=True, _rephased=0):
+    """Newton on a ShootingProblem at fixed p; moves boundaries out of contact if needed."""
+    u, ev, res, it = prob.solve(u0, p, tol=tol, max_iter=max_iter)
+    if prob.needs_rephase(u, p) or np.any(prob.boundary_clearance(u, p) <= 0):
+        if _rephased >= 2:
+            raise ConvergenceError("shooting: the segment boundaries keep falling inside a "
+                                   "contact; try more segments or a better guess")
+        prob2, u2 = prob.rephased(u, p)
+        return solve_problem(prob2, u2, p, tol=tol, max_iter=max_iter, stability=stability,
+                             _rephased=_rephased + 1)
+    return make_solution(prob, u, p, ev, res, it, stability)
+
+
+def make_solution(prob, u, p, ev, res, it, stability=True):
+    model, A, f = prob.setup(p)
+    s0, d0 = prob.state_at_zero(u, p)
+    mu = prob.multipliers(ev.Ms) if (stability and ev.Ms) else None
+    return PeriodicSolution(
+        state0=s0, disc0=d0, order=prob.order, frequency=f, amplitude=A, period=prob.order / f,
+        xmax=ev.xmax, multipliers=mu, stable=None if mu is None else bool(np.abs(mu[0]) < 1.0),
+        residual=float(res), iterations=int(it), boundaries=prob.boundaries.copy(),
+        states=np.asarray(u).reshape(prob.n_seg, prob.N2).copy(),
+        monodromy=prob.monodromy(ev.Ms) if ev.Ms else None)

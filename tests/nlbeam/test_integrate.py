@@ -1,0 +1,256 @@
+"""The integrators: analytic answers, convergence orders across impacts, events, energy."""
+import math
+
+import numpy as np
+import pytest
+
+import nlbeam
+
+PAPER = nlbeam.BeamImpact.paper()
+F40 = nlbeam.Harmonic(1e-4, 40.0)   # A = 0.1 mm at 40 Hz: an impact every period
+
+
+def free_mass_on_stop(law="hertz", m=1e-2, K=1e8, e=None, mu=None):
+    el = nlbeam.Contact(0, law, K, e=e, mu=mu, on_base=False)
+    return nlbeam.System([[m]], [[0.0]], [[0.0]], (el,), "force", output_dof=0)
+
+
+# --- linear analytic answers -----------------------------------------------------------------------
+@pytest.mark.parametrize("method", ["rk4", "adaptive"])
+def test_stop_removed_gives_the_analytic_transmissibility(method):
+    model = PAPER.replace(K_hertz=0.0)
+    f = 30.0
+    w = 2 * math.pi * f
+    T = 1.0 / f
+    kw = {"dt": T / 400} if method == "rk4" else {"rtol": 1e-11, "atol": 1e-16, "dt": T / 400}
+    # start on the analytic steady state: no transient to wait for
+    H = (model.k + 1j * w * model.b) / (model.k - model.m * w * w + 1j * w * model.b)
+    A = 1e-4
+    x0 = [A * H.real, -A * w * H.imag]
+    tr = nlbeam.integrate(model, nlbeam.Harmonic(A, f), 5 * T, method=method, x0=x0, **kw)
+    x_exact = A * np.real(H * np.exp(1j * w * tr.t))
+    assert np.max(np.abs(tr.x[:, 0] - x_exact)) / (A * abs(H)) < 1e-6
+    assert tr.xmax[0] == pytest.approx(A * abs(H), rel=1e-6)
+    assert tr.n_impacts == 0
+
+
+def test_duffing_runs_through_the_same_integrator():
+    # small forcing: the response tends to the linear one, |X| = F / |k - m w^2 + i w b|
+    duff = nlbeam.Duffing(m=1.0, b=0.1, k=1.0, k3=1.0)
+    F, f = 1e-4, 0.1
+    w = 2 * math.pi * f
+    H = 1 / (1 - w * w + 1j * 0.1 * w)
+    x0 = [F * H.real, -F * w * H.imag]
+    tr = nlbeam.integrate(duff, nlbeam.Harmonic(F, f), 10 / f, dt=1 / f / 400, x0=x0)
+    # cubic correction is of relative size k3 X^2 / k ~ 1e-8
+    assert tr.xmax[0] == pytest.approx(F * abs(H), rel=1e-6)
+
+
+# --- events ---------------------------------------------------------------------------------------
+@pytest.mark.parametrize("method", ["rk2", "rk4", "adaptive"])
+def test_contact_duration_of_a_free_mass_on_a_hertz_stop(method):
+    m, K, v0 = 1e-2, 1e8, 0.2
+    dmax = (5 * m * v0 ** 2 / (4 * K)) ** 0.4
+    tc = 2.943275 * dmax / v0
+    spc = {"rk2": 4096, "rk4": 64, "adaptive": None}[method]
+    tr = nlbeam.integrate(free_mass_on_stop(m=m, K=K), nlbeam.Harmonic(0.0, 1.0), 3 * tc,
+                          method=method, dt=tc / 5, x0=[-1e-7, v0], steps_per_contact=spc,
+                          rtol=1e-12, atol=1e-18)
+    (t_on, _, on, v_on), (t_off, _, off, v_off) = tr.events
+    assert (on, off) == (1.0, 0.0)
+    assert t_on == pytest.approx(1e-7 / v0, rel=1e-12)
+    assert (t_off - t_on) / tc == pytest.approx(1.0, abs=1e-6)   # the constant has 7 digits
+    assert v_off == pytest.approx(-v0, rel=1e-6)                   # elastic: speed restored
+    assert tr.max_landing_residual < 1e-20
+
+
+def test_no_step_crosses_a_contact_boundary_and_landing_is_to_round_off():
+    tr = nlbeam.integrate(PAPER, F40, 1.0, store_every=1)
+    assert tr.n_impacts == 40
+    assert tr.max_landing_residual < 1e-17  # a few ulps of x (~1e-3 m)
+    onsets = tr.events[tr.events[:, 2] == 1]
+    ends = tr.events[tr.events[:, 2] == 0]
+    assert np.all(onsets[:, 3] > 0) and np.all(ends[:, 3] < 0)
+    # contacts alternate onset/end and every contact has >= 8 steps
+    assert np.all(np.diff(tr.events[:, 2]) != 0)
+    assert tr.min_steps_per_contact >= 8
+
+
+def test_a_brief_touch_between_step_ends_is_not_missed():
+    # an oscillator whose amplitude exceeds the gap by 1e-3 relative: each maximum touches the
+    # stop for ~0.9 ms, shorter than the step (1.6 ms), so step ends rarely see the contact
+    m, K, k, gap = 1e-2, 1e8, 100.0, 1e-3
+    sysm = nlbeam.System([[m]], [[0.0]], [[k]], (nlbeam.Contact(0, "hertz", K, gap=gap,
+                                                                  on_base=False),), "force")
+    w = math.sqrt(k / m)
+    tr = nlbeam.integrate(sysm, nlbeam.Harmonic(0.0, 1.0), 0.2, dt=2 * math.pi / w / 40,
+                          x0=[0.0, w * gap * (1 + 1e-3)])
+    n_maxima = int((0.2 * w - math.pi / 2) // (2 * math.pi)) + 1
+    assert tr.n_impacts == n_maxima == 3
+    contact_samples = np.count_nonzero(tr.delta[:, 0] > 0)
+    assert contact_samples < tr.n_impacts   # most touches fall between the stored samples
+
+
+# --- convergence across impacts ----------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def reference_state():
+    tr = nlbeam.integrate(PAPER, F40, 0.3, method="adaptive", rtol=1e-13, atol=1e-19,
+                          dt=1 / 400, store_every=0)
+    assert tr.n_impacts == 12
+    return tr.state_end
+
+
+def _errors(method, dts, spcs, ref, **kw):
+    errs = []
+    for dt, spc in zip(dts, spcs):
+        tr = nlbeam.integrate(PAPER, F40, 0.3, method=method, dt=dt, steps_per_contact=spc,
+                              store_every=0, **kw)
+        errs.append(abs(tr.state_end[0] - ref[0]) / abs(ref[0]))
+    errs = np.array(errs)
+    return errs, np.log2(errs[:-1] / errs[1:])
+
+
+def test_rk2_keeps_order_2_across_impacts(reference_state):
+    errs, orders = _errors("rk2", [1 / 4000, 1 / 8000, 1 / 16000], [64, 128, 256], reference_state)
+    assert np.all(orders > 1.8), (errs, orders)
+
+
+def test_rk4_graded_keeps_order_near_4_and_beats_plain_rk4(reference_state):
+    dts = [1 / 4000, 1 / 8000, 1 / 16000]
+    spcs = [64, 128, 256]
+    e_g, o_g = _errors("rk4", dts, spcs, reference_state, graded=True)
+    e_p, o_p = _errors("rk4", dts, spcs, reference_state, graded=False)
+    assert np.all(o_g > 3.4), (e_g, o_g)
+    assert np.all(o_p < 3.2), (e_p, o_p)     # the delta^1.5 singularity caps plain RK4
+    assert e_g[-1] < e_p[-1] / 5
+
+
+def test_without_event_location_the_error_is_far_larger(reference_state):
+    dts = [1 / 4000, 1 / 8000]
+    e_on, _ = _errors("rk4", dts, [64, 128], reference_state)
+    e_off, o_off = _errors("rk4", dts, [64, 128], reference_state, events=False)
+    assert np.all(e_off > 1e3 * e_on)
+    assert o_off[0] < 2.0
+
+
+def test_adaptive_error_is_proportional_to_its_tolerance(reference_state):
+    errs = []
+    tols = [1e-6, 1e-8, 1e-10]
+    for rtol in tols:
+        tr = nlbeam.integrate(PAPER, F40, 0.3, method="adaptive", rtol=rtol, atol=rtol * 1e-6,
+                              dt=1 / 400, store_every=0)
+        errs.append(abs(tr.state_end[0] - reference_state[0]) / abs(reference_state[0]))
+    slope = np.polyfit(np.log10(tols), np.log10(errs), 1)[0]
+    assert 0.7 < slope < 1.3, (errs, slope)
+    assert all(e < 100 * t for e, t in zip(errs, tols))
+
+
+# --- energy ---------------------------------------------------------------------------------------
+def energy(model_m, k, K, x, v, delta):
+    return 0.5 * model_m * v ** 2 + 0.5 * k * x ** 2 + 0.4 * K * np.clip(delta, 0, None) ** 2.5
+
+
+def test_elastic_hertz_conserves_energy_over_many_impacts():
+    model = nlbeam.BeamImpact.paper(contact="hertz", b=0.0)
+    drift = []
+    for spc in (128, 256):
+        tr = nlbeam.integrate(model, nlbeam.Harmonic(0.0, 1.0), 2.0, x0=[0.0, 0.05], dt=1e-4,
+                              steps_per_contact=spc)
+        E = energy(model.m, model.k, model.K_hertz, tr.x[:, 0], tr.v[:, 0], tr.delta[:, 0])
+        drift.append(np.max(np.abs(E / E[0] - 1)))
+    assert tr.n_impacts > 80
+    # ~2e-8 per impact at 256 steps per contact, falling with order ~4 in the contact step
+    assert drift[1] < 3e-6
+    assert drift[0] / drift[1] > 8
+
+
+@pytest.mark.parametrize("law", ["lankarani-nikravesh", "hunt-crossley"])
+def test_hysteretic_laws_only_dissipate(law):
+    mu = nlbeam.mu_from_e(0.5, 2.1e8, 0.05) if law == "hunt-crossley" else None
+    model = nlbeam.BeamImpact.paper(contact=law, b=0.0, mu=mu)
+    tr = nlbeam.integrate(model, nlbeam.Harmonic(0.0, 1.0), 0.5, x0=[0.0, 0.05], dt=1e-4,
+                          steps_per_contact=256)
+    E = energy(model.m, model.k, model.K_hertz, tr.x[:, 0], tr.v[:, 0], tr.delta[:, 0])
+    assert tr.n_impacts > 5
+    # never gains more than the integration error (~1e-8 of E per impact at this resolution)
+    assert np.all(np.diff(E) <= 1e-8 * E[0])
+    assert E[-1] < 0.9 * E[0]
+
+
+def restitution(e, v0=0.1):
+    tr = nlbeam.integrate(free_mass_on_stop("lankarani-nikravesh", e=e), nlbeam.Harmonic(0.0, 1.0),
+                          2e-3, x0=[-1e-8, v0], dt=1e-4, steps_per_contact=256)
+    return -tr.events[1, 3] / tr.events[0, 3]
+
+
+def test_restitution_of_an_isolated_impact_approaches_nominal_e_as_e_tends_to_1():
+    gaps = [abs(restitution(e) - e) for e in (0.5, 0.8, 0.95, 0.99)]
+    assert gaps[-1] < 2e-3
+    assert all(a > b for a, b in zip(gaps, gaps[1:]))
+
+
+# --- a 2-DOF system with a stop --------------------------------------------------------------------
+def two_dof(K_stop=1e8, law="hertz", b=0.0):
+    M = np.diag([0.04, 0.02])
+    Kmat = np.array([[800.0 + 400.0, -400.0], [-400.0, 400.0]])
+    C = b * Kmat / 1000
+    return nlbeam.System(M, C, Kmat, (nlbeam.Contact(1, law, K_stop, e=0.7),), "base",
+                         y_load=np.array([800.0, 0.0]), yd_load=C @ np.ones(2) * 0, name="2dof")
+
+
+def test_two_dof_without_stop_matches_modal_superposition():
+    sysm = two_dof(K_stop=0.0)
+    # free vibration from an initial displacement: x(t) = sum_j phi_j q_j cos(w_j t)
+    lam, phi = np.linalg.eig(np.linalg.solve(sysm.M, sysm.K))
+    x0 = np.array([1e-3, -2e-3])
+    q0 = np.linalg.solve(phi, x0)
+    tr = nlbeam.integrate(sysm, nlbeam.Harmonic(0.0, 1.0), 0.2, x0=[*x0, 0, 0], dt=1e-5)
+    exact = (phi @ (q0[:, None] * np.cos(np.sqrt(lam)[:, None] * tr.t[None, :]))).T
+    assert np.max(np.abs(tr.x - exact)) < 1e-9
+
+
+def test_two_dof_with_a_stop_conserves_energy_and_methods_agree():
+    sysm = two_dof()
+    x0 = [0.0, 0.0, 0.1, 0.3]
+    ex = nlbeam.Harmonic(0.0, 1.0)
+    a = nlbeam.integrate(sysm, ex, 0.5, x0=x0, dt=1e-4, steps_per_contact=256)
+    b = nlbeam.integrate(sysm, ex, 0.5, x0=x0, method="adaptive", rtol=1e-11, atol=1e-16, dt=1e-4)
+    assert a.n_impacts == b.n_impacts > 5
+    E = (0.5 * np.einsum("ni,ij,nj->n", a.v, sysm.M, a.v) + 0.5 * np.einsum("ni,ij,nj->n", a.x, sysm.K, a.x)
+         + 0.4 * 1e8 * np.clip(a.delta[:, 0], 0, None) ** 2.5)
+    assert np.max(np.abs(E / E[0] - 1)) < 1e-6
+    assert np.max(np.abs(a.x - b.x)) < 1e-6 * np.max(np.abs(b.x))
+
+
+# --- storage and bad input -------------------------------------------------------------------------
+def test_store_every_and_none():
+    full = nlbeam.integrate(PAPER, F40, 0.1, dt=1e-4)
+    sparse = nlbeam.integrate(PAPER, F40, 0.1, dt=1e-4, store_every=10)
+    none = nlbeam.integrate(PAPER, F40, 0.1, dt=1e-4, store_every=0)
+    assert full.t.size == 1001 and sparse.t.size == 101 and none.t.size == 0
+    np.testing.assert_array_equal(full.x[::10], sparse.x)
+    np.testing.assert_array_equal(full.state_end, none.state_end)
+    np.testing.assert_allclose(full.t, np.linspace(0, 0.1, 1001), atol=1e-15)
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"t_end": -1.0}, "t_end"), ({"t_end": float("nan")}, "t_end"), ({"dt": 0.0}, "dt"),
+    ({"dt": -1e-4}, "dt"), ({"method": "euler"}, "method"), ({"x0": [0.0]}, "x0"),
+    ({"x0": [0.0, float("inf")]}, "x0"), ({"steps_per_contact": 0}, "steps_per_contact"),
+])
+def test_bad_integration_arguments_name_the_parameter(kwargs, name):
+    args = {"t_end": 0.1}
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=rf"^{name}:"):
+        nlbeam.integrate(PAPER, F40, **args)
+
+
+def test_a_sampled_excitation_is_not_extrapolated():
+    tab = nlbeam.Sampled(0.0, 1e-3, np.zeros(11), np.zeros(11), np.zeros(11))
+    with pytest.raises(ValueError, match="^t_end:"):
+        nlbeam.integrate(PAPER, tab, 0.02)
+
+
+def test_too_few_steps_per_contact_warns():
+    with pytest.warns(RuntimeWarning, match="steps_per_contact"):
+        nlbeam.integrate(PAPER, F40, 0.1, dt=1e-4, steps_per_contact=4, graded=False)

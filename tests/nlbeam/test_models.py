@@ -1,0 +1,78 @@
+"""The models: parameters, sign convention, helpers of the contact laws, bad input."""
+import math
+
+import numpy as np
+import pytest
+
+import nlbeam
+
+
+def test_paper_parameters_and_linear_frequency():
+    m = nlbeam.BeamImpact.paper()
+    assert (m.m, m.k, m.b, m.K_hertz, m.e) == (37.75e-3, 736.3, 0.16, 2.1e8, 0.5)
+    assert m.contact == "lankarani-nikravesh"
+    assert m.natural_frequency == pytest.approx(22.23, abs=0.01)
+    assert m.b / (2 * math.sqrt(m.k * m.m)) == pytest.approx(0.0152, abs=1e-4)
+
+
+def test_penetrated_beam_at_rest_is_pushed_out_of_the_stop():
+    # delta = x - y > 0: the stop must accelerate the beam in -x (out of the stop)
+    for law, kw in (("hertz", {}), ("lankarani-nikravesh", {}), ("hunt-crossley", {"mu": 1e5})):
+        model = nlbeam.BeamImpact.paper(contact=law, k=0.0, b=0.0, **kw)
+        tr = nlbeam.integrate(model, nlbeam.Harmonic(0.0, 10.0), 2e-5, dt=1e-6, x0=[1e-6, 0.0])
+        assert tr.force[0, 0] == pytest.approx(2.1e8 * 1e-9, rel=1e-12)
+        assert tr.v[-1, 0] < 0 and tr.x[-1, 0] < 1e-6
+
+
+def test_hertz_stiffness_from_material_and_geometry():
+    # two equal PTFE-like spheres: E = 0.5 GPa, nu = 0.46, R = 5 mm
+    E, nu, R = 0.5e9, 0.46, 5e-3
+    Er = 2 / (2 * (1 - nu ** 2) / E)
+    assert nlbeam.hertz_stiffness(E, nu, R, E, nu, R) == pytest.approx(2 / 3 * Er * math.sqrt(R / 2))
+    # sphere on a flat: R_r = R
+    assert nlbeam.hertz_stiffness(E, nu, R, E, nu, math.inf) == pytest.approx(2 / 3 * Er * math.sqrt(R))
+
+
+def test_mu_and_e_are_inverse():
+    mu = nlbeam.mu_from_e(0.5, 2.1e8, 0.1)
+    assert mu == pytest.approx(3 * 2.1e8 * 0.75 / 0.4)
+    assert nlbeam.e_from_mu(mu, 2.1e8, 0.1) == pytest.approx(0.5, rel=1e-14)
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"m": -1.0}, "m"), ({"m": 0.0}, "m"), ({"m": float("nan")}, "m"),
+    ({"k": -1.0}, "k"), ({"b": float("inf")}, "b"), ({"K_hertz": -2.0}, "K_hertz"),
+    ({"e": 0.0}, "e"), ({"e": 1.5}, "e"), ({"contact": "kelvin"}, "contact"),
+    ({"contact": "hunt-crossley"}, "mu"),
+])
+def test_bad_model_parameters_name_the_parameter(kwargs, name):
+    with pytest.raises(ValueError, match=rf"^{name}:"):
+        nlbeam.BeamImpact.paper(**kwargs)
+
+
+def test_stop_removed_is_valid():
+    m = nlbeam.BeamImpact.paper(K_hertz=0.0)
+    assert not m.has_events()
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"amplitude": float("nan"), "frequency": 1.0}, "amplitude"),
+    ({"amplitude": 1.0, "frequency": 0.0}, "frequency"),
+    ({"amplitude": 1.0, "frequency": -3.0}, "frequency"),
+])
+def test_bad_excitation_names_the_parameter(kwargs, name):
+    with pytest.raises(ValueError, match=rf"^{name}:"):
+        nlbeam.Harmonic(**kwargs)
+
+
+def test_zero_amplitude_is_valid():
+    assert nlbeam.Harmonic(0.0, 10.0).amplitude == 0.0
+
+
+def test_general_system_validates_matrices():
+    with pytest.raises(ValueError, match="^M:"):
+        nlbeam.System([[1.0, 0.0], [0.0, -1.0]], np.zeros((2, 2)), np.eye(2))
+    with pytest.raises(ValueError, match="^C:"):
+        nlbeam.System(np.eye(2), np.zeros((3, 3)), np.eye(2))
+    with pytest.raises(ValueError, match="^dof:"):
+        nlbeam.System(np.eye(2), np.zeros((2, 2)), np.eye(2), (nlbeam.Contact(5, "hertz", 1.0),))
