@@ -42,12 +42,11 @@ def test_functions(mu):
     tf = float(np.prod(mu - 1.0).real)
     tpd = float(np.prod(mu + 1.0).real)
     n = len(mu)
-    tns = 1.0
+    tns = 1.0 + 0j
     for i in range(n):
         for j in range(i + 1, n):
-            tns *= (mu[i] * mu[j] - 1.0).real if abs(mu[i].imag) > 0 and np.isclose(
-                mu[i], np.conj(mu[j])) else 1.0
-    return np.array([tf, tpd, tns])
+            tns *= mu[i] * mu[j] - 1.0
+    return np.array([tf, tpd, tns.real])
 
 
 def _scaled(ev, w, wp):
@@ -82,6 +81,7 @@ class Tracer:
         self.detect = detect
         self.max_iter = max_iter
         self.n_evaluations = 0
+        self.debug = False
 
     # --- corrector ------------------------------------------------------------------------------
     def correct(self, prob, zeta_pred, t):
@@ -134,7 +134,7 @@ class Tracer:
         tfs = [test_functions(pts[0].multipliers)]
         located = []
         ds = self.ds0
-        z_first, t_first = z.copy(), t.copy()
+        z_first = z.copy()
         reason = "max_points"
         while len(pts) < self.max_points:
             try:
@@ -145,6 +145,8 @@ class Tracer:
             except ConvergenceError:
                 ok = False
                 iters = self.max_iter
+            if self.debug:
+                print("ds", ds, "ok", ok, "iters", iters, "p", z[-1] * prob.scale_p)
             if not ok:
                 ds *= 0.5
                 if ds < self.ds_min:
@@ -173,7 +175,7 @@ class Tracer:
             if not (self.p_min <= pt.p <= self.p_max):
                 reason = "left the parameter range"
                 break
-            if len(pts) > 8 and np.linalg.norm(z - z_first) < 1.5 * ds and t @ t_first > 0.5:
+            if len(pts) > 8 and np.linalg.norm(z - z_first) < 1.5 * ds:
                 reason = "closed"
                 break
             ds = min(self.ds_max, ds * (1.6 if iters <= 2 else (1.0 if iters <= 4 else 0.6)))
@@ -196,7 +198,6 @@ class Tracer:
                 pts[-1] = self._point(prob2, z, ev2)
                 z_first = np.r_[prob2.transfer(pts[0].problem, pts[0].u, pts[0].p) / w,
                                 pts[0].p / wp]
-                t_first = t if len(pts) < 3 else t_first * 0 + t  # orientation reference reset
                 prob = prob2
         return pts, located, reason
 
@@ -232,7 +233,8 @@ class Tracer:
                 if side == 1:
                     glo *= 0.5
                 side = 1
-            if p_hi is not None and abs(p_hi - p_lo) <= self.bif_tol * max(abs(pt.p), 1e-300):
+            if (p_hi is not None and abs(p_hi - p_lo) <= self.bif_tol * max(abs(pt.p), 1e-300)
+                    and hi - lo < 1e-6):
                 break
             if g == 0 or hi - lo < 1e-15:
                 break

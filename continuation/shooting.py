@@ -214,17 +214,20 @@ class ShootingProblem:
         y = nlbeam.Harmonic(A, f).evaluate(self.boundaries / f)[0]
         return clearance(model, U, y)
 
-    def make_scale(self, u):
-        U = np.abs(np.asarray(u).reshape(self.n_seg, self.N2))
+    def make_scale(self, u, p):
+        """Scales of the unknowns: an amplitude a = max sqrt(x^2 + (v / w)^2) over the boundaries
+        (w = 2 pi f / order) for displacements, a w for velocities."""
+        f = self.setup(p)[2]
+        w = 2 * np.pi * f / self.order
+        U = np.asarray(u).reshape(self.n_seg, self.N2)
         N = self.N2 // 2
-        sx = max(float(U[:, :N].max()), 1e-300)
-        sv = max(float(U[:, N:].max()), 1e-300)
-        return np.tile(np.r_[np.full(N, sx), np.full(N, sv)], self.n_seg)
+        a = max(float(np.sqrt(U[:, :N] ** 2 + (U[:, N:] / w) ** 2).max()), 1e-300)
+        return np.tile(np.r_[np.full(N, a), np.full(N, a * w)], self.n_seg)
 
     def solve(self, u0, p, tol=1e-10, max_iter=12):
         """Newton at fixed p. Returns (u, evaluation, residual, iterations)."""
         if self.scale_u is None:
-            self.scale_u = self.make_scale(u0)
+            self.scale_u = self.make_scale(u0, p)
         w = self.scale_u
 
         def fun(z):
@@ -253,10 +256,11 @@ class ShootingProblem:
                                 steps_per_contact=it.steps_per_contact, rtol=it.rtol,
                                 atol=it.atol)
 
-    def rephased(self, u, p, n_seg=None):
+    def rephased(self, u, p, n_seg=None, steps_per_period=None):
         """A problem with boundaries moved into free flight (as far from the stops as possible,
         spread over the period), and its u from an integration of the orbit."""
         n_seg = n_seg or self.n_seg
+        spp = self.steps_per_period if steps_per_period is None else steps_per_period
         model, A, f = self.setup(p)
         tr = self.trajectory(u, p)
         t, S = tr.t[:-1], np.hstack([tr.x, tr.v])[:-1]
@@ -284,11 +288,13 @@ class ShootingProblem:
         order = np.argsort(ph)
         ph = ph[order]
         idx = [idx[i] for i in order]
-        new = ShootingProblem(self.base_model, self.amplitude, self.frequency, self.order, ph,
-                              self.integrator, parameter=self.parameter,
-                              steps_per_period=self.steps_per_period, scale_p=self.scale_p)
+        new = ShootingProblem(self.base_model, A if self.parameter == "amplitude" else
+                              self.amplitude, f if self.parameter == "frequency" else
+                              self.frequency, self.order, ph, self.integrator,
+                              parameter=self.parameter, steps_per_period=spp,
+                              scale_p=self.scale_p)
         unew = S[idx].ravel()
-        new.scale_u = new.make_scale(unew)
+        new.scale_u = new.make_scale(unew, p)
         new.sel_clearance = c[idx] if np.isfinite(c[0]) else None
         return new, unew
 
@@ -297,6 +303,39 @@ class ShootingProblem:
             return False
         c = self.boundary_clearance(u, p)
         return bool(np.any(c < 0.3 * self.sel_clearance))
+
+    def adapt(self, u, p):
+        """None, or (problem, u) with boundaries moved out of contact / the step level changed /
+        the scales renewed, when the orbit at p asks for it."""
+        model, A, f = self.setup(p)
+        spp = self.integrator.steps_per_period(model, f)
+        ratio = self.make_scale(u, p) / self.scale_u
+        if (spp != self.steps_per_period or self.needs_rephase(u, p)
+                or np.any(ratio > 3) or np.any(ratio < 1 / 3)):
+            return self.rephased(u, p, steps_per_period=spp)
+        return None
+
+    def transfer(self, old, u_old, p):
+        """The states at this problem's boundaries of the orbit u_old of problem ``old`` at p."""
+        model, A, f = old.setup(p)
+        ex = nlbeam.Harmonic(A, f)
+        U = np.asarray(u_old).reshape(old.n_seg, old.N2)
+        b = old.boundaries
+        out = np.empty((self.n_seg, self.N2))
+        it = old.integrator
+        for i, phi in enumerate(self.boundaries):
+            ph = b[0] + (phi - b[0]) % old.order
+            j = int(np.searchsorted(b, ph, side="right") - 1)
+            dphi = ph - b[j]
+            if dphi < 1e-12:
+                out[i] = U[j]
+                continue
+            dt = (dphi / f) / max(1, int(round(old.steps_per_period * dphi))) \
+                if old.steps_per_period else dphi / f
+            out[i] = nlbeam.flow(model, ex, U[j], b[j] / f, dphi / f, method=it.method, dt=dt,
+                                 steps_per_contact=it.steps_per_contact, rtol=it.rtol,
+                                 atol=it.atol).state
+        return out.ravel()
 
     def state_at_zero(self, u, p):
         """(state, disc) at t = 0 (excitation phase zero) of the orbit u."""
