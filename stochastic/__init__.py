@@ -10,3 +10,6 @@ from .noise import BandLimitedNoise, Realization, Recorded, SpectralNoise, hermi
 __all__ = ["BandLimitedNoise", "SpectralNoise", "Realization", "Recorded", "hermite_step",
            "WelchPSD", "StreamingHistogram", "StreamingMoments", "correlation_from_psd",
            "welch_dof"]
+from .simulate import EnsembleResult, StochasticResult, ensemble, load, simulate  # noqa: E402
+
+__all__ += ["simulate", "StochasticResult", "load", "ensemble", "EnsembleResult"]

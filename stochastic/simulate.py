@@ -1,0 +1,541 @@
+"""The streaming simulation loop, its result object, HDF5 files and ensembles.
+
+``simulate`` alternates between Python and the compiled integrator one chunk at a time:
+the excitation of the chunk is synthesized (a ``nlbeam.Sampled`` table), ``nlbeam.integrate``
+continues from the previous chunk's end state and contact memory, and the stored samples
+feed the streaming estimators. Memory is one chunk, whatever the duration.
+"""
+from __future__ import annotations
+
+import math
+import os
+import re
+import sys
+import tempfile
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from nlbeam._validate import nonnegative, positive
+
+from .estimators import StreamingHistogram, StreamingMoments, WelchPSD, correlation_from_psd
+
+__all__ = ["simulate", "StochasticResult", "load", "ensemble", "EnsembleResult"]
+
+CHANNELS = ("x", "v", "y", "yd", "delta", "force")
+OUTPUTS = ("psd", "pdf", "moments")
+_FORMAT = "nlbeam.stochastic.result/1"
+
+
+def _parse_channel(name, model):
+    m = re.fullmatch(r"(x|v|y|yd|delta|force)(?:\[(\d+)\])?", str(name))
+    if m is None:
+        raise ValueError(f"channels: unknown channel {name!r}; use one of {', '.join(CHANNELS)}, "
+                         "optionally indexed like 'x[1]' or 'delta[0]'")
+    kind, idx = m.group(1), m.group(2)
+    if kind in ("x", "v"):
+        i = model.output_dof if idx is None else int(idx)
+        if not 0 <= i < model.n_dof:
+            raise ValueError(f"channels: {name!r} indexes DOF {i}, the model has {model.n_dof}")
+    elif kind in ("delta", "force"):
+        i = 0 if idx is None else int(idx)
+        if not 0 <= i < model.n_elements:
+            raise ValueError(f"channels: {name!r} indexes element {i}, the model has {model.n_elements}")
+    else:
+        if idx is not None:
+            raise ValueError(f"channels: {name!r}: the excitation channel takes no index")
+        i = 0
+    return kind, i
+
+
+def _extract(tr, kind, i, sel):
+    if kind == "x":
+        return tr.x[sel, i]
+    if kind == "v":
+        return tr.v[sel, i]
+    if kind == "delta":
+        return tr.delta[sel, i]
+    if kind == "force":
+        return tr.force[sel, i]
+    y, yd = tr.excitation.evaluate(tr.t[sel])
+    return y if kind == "y" else yd
+
+
+def _chunk_excitation(excitation, t_a, t_b):
+    if hasattr(excitation, "sampled") and not _is_plain_table(excitation):
+        return excitation.sampled(t_b, t_start=t_a)
+    return excitation
+
+
+def _is_plain_table(excitation):
+    from nlbeam.excitation import Sampled
+
+    return isinstance(excitation, Sampled)
+
+
+def _attr(v):
+    if v is None:
+        return "none"
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v) if abs(int(v)) < 2 ** 63 else str(v)
+    if isinstance(v, (float, np.floating)):
+        return float(v)
+    return str(v)
+
+
+@dataclass
+class StochasticResult:
+    """Statistics of one simulated record.
+
+    Per channel (``channels``): Welch PSD ``psd(ch) -> (f Hz, P units^2/Hz)`` with its
+    chi-square 95 % interval ``psd_interval(ch)`` and ``n_averages`` segments; histogram
+    PDF ``pdf(ch) -> (centres, density)`` with under/overflow counts; ``moments(ch)`` ->
+    dict(mean, std, skewness, kurtosis (non-excess), se_* standard errors, n_eff_*).
+    The moment standard errors use the autocorrelation obtained from the channel's own PSD
+    (Gaussian-process formulas) and, when batches are available, batch means.
+    ``history``: kept time samples (``t`` and channels) or None.
+    """
+
+    channels: tuple
+    outputs: tuple
+    fs: float
+    dt: float
+    t_start: float
+    transient: float
+    duration: float
+    method: str
+    seed: object
+    model_parameters: dict
+    excitation_description: dict
+    nlbeam_version: str
+    psd_data: dict = field(default_factory=dict)
+    pdf_data: dict = field(default_factory=dict)
+    moment_data: dict = field(default_factory=dict)
+    history: dict | None = None
+    n_impacts: int = 0
+    n_steps: int = 0
+    n_chunks: int = 0
+    n_samples: int = 0
+    min_steps_per_contact: int = 0
+    wall_time: float = 0.0
+    success: bool = True
+    message: str = "completed"
+
+    def _get(self, store, ch, what):
+        if ch not in self.channels:
+            raise ValueError(f"ch: {ch!r} was not recorded; channels are {self.channels}")
+        if ch not in store:
+            raise ValueError(f"ch: {what} was not computed (outputs={self.outputs})")
+        return store[ch]
+
+    def psd(self, ch="delta"):
+        """(frequencies Hz, one-sided PSD units^2/Hz) of channel ``ch``."""
+        d = self._get(self.psd_data, ch, "psd")
+        return d["frequencies"], d["psd"]
+
+    def psd_interval(self, ch="delta"):
+        """(lower, upper) chi-square 95 % bounds of the PSD of ``ch`` (Welch dof)."""
+        d = self._get(self.psd_data, ch, "psd")
+        return d["ci95_low"], d["ci95_high"]
+
+    def n_averages(self, ch="delta"):
+        """Number of Welch segments averaged for ``ch``."""
+        return int(self._get(self.psd_data, ch, "psd")["n_segments"])
+
+    def psd_relative_std(self, ch="delta"):
+        """Relative standard deviation of each PSD bin of ``ch``, sqrt(2/nu)."""
+        return self._get(self.psd_data, ch, "psd")["relative_std"]
+
+    def pdf(self, ch="delta"):
+        """(bin centres, probability density 1/units) of ``ch``; see ``pdf_details``."""
+        d = self._get(self.pdf_data, ch, "pdf")
+        return d["centres"], d["density"]
+
+    def pdf_details(self, ch="delta"):
+        """Full histogram record: edges, counts, n_below, n_above, n_total, density_se."""
+        return dict(self._get(self.pdf_data, ch, "pdf"))
+
+    def moments(self, ch="delta"):
+        """dict(mean, std, skewness, kurtosis, se_mean, se_std..., n, n_eff_*) of ``ch``."""
+        return dict(self._get(self.moment_data, ch, "moments"))
+
+    # -- files ------------------------------------------------------------------------
+    def save(self, path):
+        """Write to HDF5 (temporary file in the same directory, then renamed)."""
+        import h5py
+
+        path = os.fspath(path)
+        d = os.path.dirname(os.path.abspath(path))
+        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".h5", dir=d)
+        os.close(fd)
+        try:
+            with h5py.File(tmp, "w") as f:
+                meta = {"format": _FORMAT, "channels": ",".join(self.channels),
+                        "outputs": ",".join(self.outputs), "fs": self.fs, "dt": self.dt,
+                        "t_start": self.t_start, "transient": self.transient,
+                        "duration": self.duration, "method": self.method, "seed": self.seed,
+                        "nlbeam_version": self.nlbeam_version, "n_impacts": self.n_impacts,
+                        "n_steps": self.n_steps, "n_chunks": self.n_chunks,
+                        "n_samples": self.n_samples, "wall_time": self.wall_time,
+                        "min_steps_per_contact": self.min_steps_per_contact,
+                        "success": self.success, "message": self.message}
+                for k, v in meta.items():
+                    f.attrs[k] = _attr(v)
+                g = f.create_group("model")
+                for k, v in self.model_parameters.items():
+                    g.attrs[k] = _attr(v)
+                g = f.create_group("excitation")
+                for k, v in self.excitation_description.items():
+                    g.attrs[k] = _attr(v)
+                for store, name in ((self.psd_data, "psd"), (self.pdf_data, "pdf"),
+                                    (self.moment_data, "moments")):
+                    for ch, data in store.items():
+                        g = f.require_group(f"channels/{ch}/{name}")
+                        for k, v in data.items():
+                            if isinstance(v, np.ndarray):
+                                g.create_dataset(k, data=v)
+                            else:
+                                g.attrs[k] = _attr(v)
+                if self.history is not None:
+                    g = f.create_group("history")
+                    for k, v in self.history.items():
+                        g.create_dataset(k, data=v)
+            os.replace(tmp, path)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.remove(tmp)
+            raise
+        return path
+
+
+def load(path) -> StochasticResult:
+    """Read a :class:`StochasticResult` written by ``save``."""
+    import h5py
+
+    def val(v):
+        if isinstance(v, bytes):
+            v = v.decode()
+        if isinstance(v, np.generic):
+            v = v.item()
+        return v
+
+    with h5py.File(os.fspath(path), "r") as f:
+        a = {k: val(v) for k, v in f.attrs.items()}
+        if a.get("format") != _FORMAT:
+            raise ValueError(f"path: {path!r} is not a stochastic result file (format {a.get('format')!r})")
+        stores = {"psd": {}, "pdf": {}, "moments": {}}
+        chans = tuple(c for c in a["channels"].split(",") if c)
+        for ch in chans:
+            for name in stores:
+                key = f"channels/{ch}/{name}"
+                if key in f:
+                    g = f[key]
+                    d = {k: val(v) for k, v in g.attrs.items()}
+                    d.update({k: g[k][()] for k in g.keys()})
+                    stores[name][ch] = d
+        hist = {k: f["history"][k][()] for k in f["history"].keys()} if "history" in f else None
+        res = StochasticResult(
+            channels=chans, outputs=tuple(o for o in a["outputs"].split(",") if o), fs=a["fs"],
+            dt=a["dt"], t_start=a["t_start"], transient=a["transient"], duration=a["duration"],
+            method=a["method"], seed=a["seed"],
+            model_parameters={k: val(v) for k, v in f["model"].attrs.items()},
+            excitation_description={k: val(v) for k, v in f["excitation"].attrs.items()},
+            nlbeam_version=a["nlbeam_version"], psd_data=stores["psd"], pdf_data=stores["pdf"],
+            moment_data=stores["moments"], history=hist, n_impacts=a["n_impacts"],
+            n_steps=a["n_steps"], n_chunks=a["n_chunks"], n_samples=a["n_samples"],
+            min_steps_per_contact=a["min_steps_per_contact"], wall_time=a["wall_time"],
+            success=bool(a["success"]), message=a["message"])
+    return res
+
+
+def _default_resolution(duration):
+    # >= ~31 Welch averages (50 % overlap), never finer than 0.05 Hz
+    return max(0.05, 16.0 / duration)
+
+
+def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, channels=("delta",),
+             method="rk4", dt=None, rtol=1e-8, atol=1e-12, seed=None, psd_resolution=None,
+             keep_history=None, *, x0=None, store_every=1, steps_per_contact=None,
+             chunk_duration=None, pdf_bins=200, pdf_edges=None, batch_duration=None,
+             progress=None) -> StochasticResult:
+    """Simulate ``model`` under ``excitation`` for ``transient + duration`` seconds and
+    return the statistics of the last ``duration`` seconds.
+
+    excitation: a stochastic excitation (``BandLimitedNoise``, ``SpectralNoise``,
+    ``Realization``, ``Recorded``), any ``nlbeam.Excitation``, or a callable
+    ``seed -> excitation`` (then ``seed`` is required).
+    duration, transient: s (transient default: 10 / (damping ratio * 2 pi f_n) of the
+    slowest mode, i.e. ~10 decay times). outputs: any of "psd", "pdf", "moments".
+    channels: "x", "v" (output DOF, or "x[i]"), "y", "yd", "delta", "force" ("delta[e]").
+    method, dt, rtol, atol, steps_per_contact, x0: as ``nlbeam.integrate``; the samples are
+    every ``store_every`` steps of ``dt`` (sampling frequency fs = 1/(dt store_every));
+    the band of a noise must lie below fs/2 (checked).
+    psd_resolution: Welch bin spacing (Hz), default max(0.05, 16/duration).
+    keep_history: (t0, t1) s, keep the samples in that window (memory ~ its length).
+    chunk_duration: s per call to the integrator (default: the noise's block or 1 s).
+    pdf_bins / pdf_edges: histogram (edges chosen from the first kept chunk if not given).
+    batch_duration: s per batch for batch-means standard errors (default duration/40).
+    progress: callable(t_done_s, t_total_s) called after every chunk, or True to print.
+    """
+    import nlbeam
+
+    t_wall = time.perf_counter()
+    if callable(excitation) and not hasattr(excitation, "kernel_args"):
+        if seed is None:
+            raise ValueError("seed: required when excitation is a factory seed -> excitation")
+        excitation = excitation(seed)
+    if not hasattr(excitation, "kernel_args"):
+        raise ValueError("excitation: must be an nlbeam.Excitation or a stochastic excitation")
+    if not hasattr(model, "kernel_arrays"):
+        raise ValueError("model: must be an nlbeam model (BeamImpact, Duffing, System, ...)")
+    duration = positive("duration", duration, unit="s")
+    if isinstance(outputs, str):
+        outputs = (outputs,)
+    outputs = tuple(outputs)
+    for o in outputs:
+        if o not in OUTPUTS:
+            raise ValueError(f"outputs: must be a subset of {OUTPUTS}, got {o!r}")
+    if isinstance(channels, str):
+        channels = (channels,)
+    channels = tuple(channels)
+    if not channels:
+        raise ValueError("channels: give at least one channel")
+    parsed = {ch: _parse_channel(ch, model) for ch in channels}
+    if transient is None:
+        wn = 2 * np.pi * np.min(model.system.natural_frequencies())
+        zeta = _min_damping_ratio(model)
+        transient = 10.0 / max(zeta * wn, 1e-3)
+    transient = nonnegative("transient", transient, unit="s")
+    if isinstance(store_every, bool) or not isinstance(store_every, (int, np.integer)) or store_every < 1:
+        raise ValueError(f"store_every: must be an integer >= 1, got {store_every!r}")
+    if dt is None:
+        dt = nlbeam.default_dt(model, excitation, method)
+    dt = positive("dt", dt, unit="s")
+    fs = 1.0 / (dt * store_every)
+    if hasattr(excitation, "check_band_vs_step"):
+        excitation.check_band_vs_step(dt * store_every)
+    t0 = float(excitation.time_span()[0]) if math.isfinite(excitation.time_span()[0]) else 0.0
+    n_tr = int(round(transient / (dt * store_every))) * store_every  # steps, on the sample grid
+    n_keep = int(round(duration / (dt * store_every))) * store_every
+    if n_keep < 2 * store_every:
+        raise ValueError(f"duration: must span at least 2 samples (>= {2 * dt * store_every:.3g} s)")
+    n_total = n_tr + n_keep
+    t_total_end = t0 + n_total * dt
+    hi = excitation.time_span()[1]
+    if t_total_end > hi + 1e-9 * max(abs(hi), 1.0):
+        raise ValueError(f"duration: transient + duration = {n_total * dt:.6g} s exceeds the "
+                         f"excitation's span, which ends at {hi:.6g} s")
+    if chunk_duration is None:
+        chunk_duration = getattr(excitation, "block_duration", 1.0)
+    chunk_duration = positive("chunk_duration", chunk_duration, unit="s")
+    m = max(int(round(chunk_duration / (dt * store_every))), 2) * store_every  # steps per chunk
+    if psd_resolution is None:
+        psd_resolution = _default_resolution(n_keep * dt)
+    psd_resolution = positive("psd_resolution", psd_resolution, unit="Hz")
+    if "psd" in outputs and psd_resolution * n_keep * dt < 1.0:
+        raise ValueError(f"psd_resolution: {psd_resolution} Hz needs segments of "
+                         f"{1 / psd_resolution:.3g} s, longer than duration {n_keep * dt:.3g} s")
+    if batch_duration is None:
+        batch_duration = n_keep * dt / 40.0
+    batch = max(int(round(positive("batch_duration", batch_duration, unit="s") * fs)), 8)
+    if keep_history is not None:
+        try:
+            h0, h1 = (float(v) for v in keep_history)
+        except (TypeError, ValueError):
+            raise ValueError(f"keep_history: must be (t0, t1) in s or None, got {keep_history!r}") from None
+        if not h1 > h0:
+            raise ValueError(f"keep_history: must satisfy t0 < t1, got {keep_history!r}")
+    if progress is True:
+        def progress(done, total):  # noqa: F811 - the printing default
+            print(f"stochastic.simulate: {done:.4g} / {total:.4g} s", file=sys.stderr)
+
+    est = {}
+    for ch in channels:
+        e = {}
+        if "psd" in outputs:
+            e["psd"] = WelchPSD(fs, psd_resolution)
+        if "pdf" in outputs:
+            e["pdf"] = StreamingHistogram(pdf_edges, bins=pdf_bins)
+        if "moments" in outputs:
+            e["moments"] = StreamingMoments(batch_size=batch)
+        est[ch] = e
+    hist_parts = {"t": []}
+    hist_parts.update({ch: [] for ch in channels})
+
+    state, disc = x0, None
+    chunk_warnings = {}
+    n_impacts = n_steps = n_chunks = n_samples = 0
+    min_spc = 0
+    k0 = 0
+    while k0 < n_total:
+        k1 = min(k0 + m, n_total)
+        t_a, t_b = t0 + k0 * dt, t0 + k1 * dt
+        exc = _chunk_excitation(excitation, t_a, t_b)
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                tr = nlbeam.integrate(model, exc, t_b, method=method, dt=dt, x0=state, t0=t_a,
+                                      disc0=disc, store_every=store_every,
+                                      steps_per_contact=steps_per_contact, rtol=rtol, atol=atol)
+        except nlbeam.IntegrationError as err:
+            raise nlbeam.IntegrationError(f"chunk [{t_a:.6g}, {t_b:.6g}] s: {err}") from err
+        for w in caught:  # gathered, and reported once at the end
+            key = (w.category, re.sub(r"\d+", "#", str(w.message)))
+            if key not in chunk_warnings:
+                chunk_warnings[key] = [w, 0]
+            chunk_warnings[key][1] += 1
+        state, disc = tr.state_end, tr.disc_end
+        n_impacts += tr.n_impacts
+        n_steps += tr.n_steps
+        n_chunks += 1
+        if tr.min_steps_per_contact > 0:
+            min_spc = tr.min_steps_per_contact if min_spc == 0 else min(min_spc, tr.min_steps_per_contact)
+        # samples on the global grid t0 + j store_every dt, [t_a, t_b): drop the chunk end
+        j = np.rint((tr.t - t0) / (dt * store_every))
+        on_grid = np.abs((tr.t - t0) / (dt * store_every) - j) < 1e-6
+        keep = on_grid & (j * store_every >= max(k0, n_tr)) & (j * store_every < k1)
+        sel = np.nonzero(keep)[0]
+        expected = (k1 - max(k0, n_tr)) // store_every if k1 > n_tr else 0
+        if sel.size != max(expected, 0):
+            raise RuntimeError(f"internal: chunk [{t_a}, {t_b}] s gave {sel.size} samples on the "
+                               f"grid, expected {expected}; nlbeam.integrate's sampling changed?")
+        if sel.size:
+            n_samples += sel.size
+            for ch, (kind, i) in parsed.items():
+                data = np.ascontiguousarray(_extract(tr, kind, i, sel))
+                for e in est[ch].values():
+                    e.update(data)
+                if keep_history is not None:
+                    hsel = (tr.t[sel] >= h0) & (tr.t[sel] <= h1)
+                    if np.any(hsel):
+                        hist_parts[ch].append(data[hsel])
+            if keep_history is not None:
+                hsel = (tr.t[sel] >= h0) & (tr.t[sel] <= h1)
+                if np.any(hsel):
+                    hist_parts["t"].append(tr.t[sel][hsel])
+        k0 = k1
+        if progress is not None:
+            progress(k0 * dt, n_total * dt)
+
+    res = StochasticResult(
+        channels=channels, outputs=outputs, fs=fs, dt=dt, t_start=t0, transient=n_tr * dt,
+        duration=n_keep * dt, method=method,
+        seed=_attr(seed if seed is not None else getattr(excitation, "seed", None)),
+        model_parameters=dict(model.parameters()),
+        excitation_description=dict(excitation.describe()),
+        nlbeam_version=str(getattr(nlbeam, "__version__", "unknown")))
+    for ch in channels:
+        e = est[ch]
+        rho = None
+        if "psd" in e:
+            r = e["psd"].result()
+            res.psd_data[ch] = r
+            try:
+                rho = correlation_from_psd(r["psd"], fs, e["psd"].nperseg)
+            except ValueError:
+                rho = None
+        if "pdf" in e:
+            res.pdf_data[ch] = e["pdf"].result()
+        if "moments" in e:
+            res.moment_data[ch] = e["moments"].result(rho=rho)
+    if keep_history is not None:
+        res.history = {k: (np.concatenate(v) if v else np.zeros(0)) for k, v in hist_parts.items()}
+    res.n_impacts, res.n_steps, res.n_chunks, res.n_samples = n_impacts, n_steps, n_chunks, n_samples
+    res.min_steps_per_contact = min_spc
+    if chunk_warnings:
+        msgs = [f"{str(w.message)} (in {n} of {n_chunks} chunks; fewest steps in a contact "
+                f"over the run: {min_spc})" for w, n in chunk_warnings.values()]
+        res.message = "completed with warnings: " + "; ".join(msgs)
+        for (w, n), text in zip(chunk_warnings.values(), msgs):
+            warnings.warn(text, w.category, stacklevel=2)
+    res.wall_time = time.perf_counter() - t_wall
+    return res
+
+
+def _min_damping_ratio(model):
+    """Smallest modal damping ratio of the linear structure (for the default transient)."""
+    s = model.system
+    M, C, K = (np.asarray(a, dtype=float) for a in (s.M, s.C, s.K))
+    w2, V = np.linalg.eig(np.linalg.solve(M, K))
+    z = []
+    for k in range(w2.size):
+        v = np.real(V[:, k])
+        mk, ck, kk = v @ M @ v, v @ C @ v, v @ K @ v
+        if kk > 0 and mk > 0:
+            z.append(ck / (2 * math.sqrt(kk * mk)))
+    return max(min(z), 1e-4) if z else 1.0
+
+
+# -- ensembles ----------------------------------------------------------------------------
+@dataclass
+class EnsembleResult:
+    """Members of an ensemble and their combination.
+
+    ``psd(ch) -> (f, mean P, lower, upper)``: mean over members with a Student-t 95 %
+    interval from the member scatter. ``moments(ch)``: for each of mean, std, skewness,
+    kurtosis the mean over members, its standard error (member scatter / sqrt(M)) and a
+    95 % interval; plus the pooled estimate from merging all samples.
+    """
+
+    seeds: list
+    members: list
+
+    def _check(self):
+        if len(self.members) < 2:
+            raise ValueError("seeds: an ensemble needs at least 2 members for an interval")
+
+    def psd(self, ch="delta"):
+        from scipy.stats import t as student
+
+        self._check()
+        P = np.array([m.psd(ch)[1] for m in self.members])
+        M = P.shape[0]
+        mean = P.mean(axis=0)
+        se = P.std(axis=0, ddof=1) / math.sqrt(M)
+        q = student.ppf(0.975, M - 1)
+        return self.members[0].psd(ch)[0], mean, mean - q * se, mean + q * se
+
+    def moments(self, ch="delta"):
+        from scipy.stats import t as student
+
+        self._check()
+        M = len(self.members)
+        q = student.ppf(0.975, M - 1)
+        out = {"n_members": M}
+        for key in ("mean", "std", "skewness", "kurtosis"):
+            v = np.array([m.moments(ch)[key] for m in self.members])
+            se = float(v.std(ddof=1) / math.sqrt(M))
+            out[key] = float(v.mean())
+            out[f"se_{key}"] = se
+            out[f"ci95_{key}"] = (float(v.mean() - q * se), float(v.mean() + q * se))
+        return out
+
+
+def _member(args):
+    model, make_excitation, seed, kwargs = args
+    return simulate(model, make_excitation, seed=seed, **kwargs)
+
+
+def ensemble(model, make_excitation, seeds, duration, *, processes=None, **kwargs) -> EnsembleResult:
+    """Run ``simulate`` once per seed (excitation ``make_excitation(seed)``) in a process
+    pool and combine. make_excitation must be picklable (a module-level function) unless
+    ``processes=1`` (run in this process). Other keywords go to :func:`simulate`."""
+    seeds = list(seeds)
+    if len(seeds) < 1:
+        raise ValueError("seeds: give at least one seed")
+    if len(set(seeds)) != len(seeds):
+        raise ValueError("seeds: must be distinct")
+    kwargs["duration"] = duration
+    jobs = [(model, make_excitation, s, kwargs) for s in seeds]
+    if processes == 1 or len(seeds) == 1:
+        members = [_member(j) for j in jobs]
+    else:
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(max_workers=processes) as pool:
+            members = list(pool.map(_member, jobs))
+    return EnsembleResult(seeds=seeds, members=members)

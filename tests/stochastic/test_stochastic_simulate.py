@@ -1,0 +1,197 @@
+"""The simulation loop: a linear system's response statistics equal the closed form, the
+chunked streaming loop equals one long integration, results survive a file round trip."""
+import math
+import os
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+import scipy.signal
+import scipy.stats
+
+import nlbeam
+import stochastic as st
+
+M, K, B = 37.75e-3, 736.3, 0.16
+
+
+def H_delta(f):
+    """delta = x - y per unit y for m x'' + b x' + k x = b y' + k y."""
+    w = 2 * np.pi * f
+    return M * w ** 2 / (K - M * w ** 2 + 1j * w * B)
+
+
+def expected_welch(S, f_bins, fs, nperseg, span=12):
+    """E[Welch estimate] of a process with one-sided PSD S: S convolved with the Hann
+    window's spectral kernel |W(df)|^2 / (fs sum w^2) (integrates to 1)."""
+    w = scipy.signal.get_window("hann", nperseg)
+    df = fs / nperseg
+    off = np.linspace(-span * df, span * df, 40 * span + 1)
+    n = np.arange(nperseg)
+    W = np.exp(-2j * np.pi * np.outer(off, n) / fs) @ w
+    ker = np.abs(W) ** 2 / (fs * np.sum(w * w))
+    d_off = off[1] - off[0]
+    return np.array([np.sum(S(fk - off) * ker) * d_off for fk in f_bins])
+
+
+@pytest.fixture(scope="module")
+def linear_run():
+    model = nlbeam.BeamImpact(K_hertz=0.0)
+    noise = st.BandLimitedNoise((0.0, 100.0), rms=1e-4, seed=21)
+    res = st.simulate(model, noise, 200.0, channels=("delta", "y"), dt=1e-4, store_every=2,
+                      psd_resolution=0.25)
+    return model, noise, res
+
+
+def test_linear_response_psd_is_H2_G(linear_run):
+    model, noise, res = linear_run
+    f, P = res.psd("delta")
+    lo, hi = res.psd_interval("delta")
+    sel = (f >= 5.0) & (f <= 60.0)
+    S = lambda nu: np.abs(H_delta(nu)) ** 2 * noise.psd(nu)  # noqa: E731
+    E = expected_welch(S, f[sel], res.fs, int(round(res.fs / 0.25)))
+    ratio = P[sel] / E
+    rel = res.psd_relative_std("delta")[sel][0]
+    assert abs(ratio.mean() - 1) < 4 * rel / math.sqrt(sel.sum() / 2)
+    cover = np.mean((lo[sel] <= E) & (E <= hi[sel]))
+    assert cover >= 0.85, cover
+    # the resonance peak (22.2 Hz) in particular
+    pk = np.argmax(E)
+    assert abs(P[sel][pk] / E[pk] - 1) < 4 * rel
+    # and the excitation channel has the target G
+    fy, Py = res.psd("y")
+    s2 = (fy > 5) & (fy < 95)
+    assert abs(np.mean(Py[s2] / noise.psd(fy[s2])) - 1) < 4 * rel / math.sqrt(s2.sum() / 2)
+
+
+def test_linear_response_variance_is_the_integral(linear_run):
+    model, noise, res = linear_run
+    fg = np.linspace(0.0, 100.0, 400_001)
+    var = np.trapezoid(np.abs(H_delta(fg)) ** 2 * noise.psd(fg), fg)
+    mo = res.moments("delta")
+    assert abs(mo["std"] ** 2 - var) < 4 * mo["se_variance"], (mo["std"] ** 2, var, mo["se_variance"])
+    assert abs(mo["skewness"]) < 4 * mo["se_skewness"]
+    assert abs(mo["kurtosis"] - 3) < 4 * mo["se_kurtosis"]
+    assert res.n_averages("delta") >= 90 and res.n_impacts == 0
+
+
+@pytest.mark.parametrize("k_hertz", [0.0, 2.1e8])
+def test_chunked_loop_equals_statistics_of_its_history(k_hertz):
+    model = nlbeam.BeamImpact(K_hertz=k_hertz)
+    noise = st.BandLimitedNoise((0.0, 200.0), rms=1e-4, seed=4)
+    res = st.simulate(model, noise, 3.0, transient=0.5, channels=("delta", "x"), dt=1e-4,
+                      chunk_duration=0.37, psd_resolution=2.0, keep_history=(0.0, 10.0))
+    t = res.history["t"]
+    assert t[0] == pytest.approx(0.5) and t.size == 30_000
+    assert np.allclose(np.diff(t), 1e-4, rtol=0, atol=1e-12)  # no duplicate at chunk joins
+    d = res.history["delta"]
+    f, P = scipy.signal.welch(d, res.fs, window="hann", nperseg=5000, noverlap=2500, detrend="constant")
+    assert np.max(np.abs(res.psd("delta")[1] - P)) < 1e-12 * P.max()
+    mo = res.moments("delta")
+    assert mo["mean"] == pytest.approx(d.mean(), rel=1e-10)
+    assert mo["skewness"] == pytest.approx(scipy.stats.skew(d), rel=1e-9)
+    assert mo["kurtosis"] == pytest.approx(scipy.stats.kurtosis(d, fisher=False), rel=1e-9)
+    # one long integration over the same excitation gives the same record
+    tr = nlbeam.integrate(model, noise.sampled(3.5), 3.5, dt=1e-4)
+    ref = tr.delta[5000:35000, 0]
+    tol = 1e-12 if k_hertz == 0 else 1e-6
+    assert np.max(np.abs(d - ref)) <= tol * np.max(np.abs(ref))
+
+
+def test_paper_model_response_is_non_gaussian():
+    """Paper section 5: the response to Gaussian base noise is skewed to the free side
+    (negative skewness of delta) and has kurtosis > 3."""
+    noise = st.BandLimitedNoise((0.0, 200.0), rms=1e-4, seed=8)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = st.simulate(nlbeam.BeamImpact(), noise, 8.0, transient=2.0, psd_resolution=1.0)
+    assert len(caught) <= 1
+    mo = res.moments("delta")
+    se_s = max(mo["se_skewness"], mo.get("se_batch_skewness", 0))
+    se_k = max(mo["se_kurtosis"], mo.get("se_batch_kurtosis", 0))
+    assert mo["skewness"] + 4 * se_s < 0
+    assert mo["kurtosis"] - 4 * se_k > 3
+    assert res.n_impacts > 100 and res.min_steps_per_contact > 0
+    # nlbeam warns when a contact got fewer than 8 steps; simulate reports it once
+    assert (res.min_steps_per_contact < 8) == ("fewest steps" in res.message)
+    c, dens = res.pdf("delta")
+    det = res.pdf_details("delta")
+    assert det["n_below"] == det["n_above"] == 0
+    assert np.sum(dens * np.diff(det["edges"])) == pytest.approx(1.0)
+
+
+def test_save_load_round_trip(tmp_path):
+    noise = st.BandLimitedNoise((0.0, 100.0), rms=1e-4, seed=3, lowpass=40.0)
+    res = st.simulate(nlbeam.BeamImpact(), noise, 2.0, transient=0.2, channels=("delta", "force"),
+                      psd_resolution=2.0, keep_history=(1.0, 1.1))
+    p = res.save(tmp_path / "r.h5")
+    assert os.listdir(tmp_path) == ["r.h5"]  # the temporary file was renamed
+    back = st.load(p)
+    for ch in ("delta", "force"):
+        assert np.array_equal(back.psd(ch)[1], res.psd(ch)[1])
+        assert np.array_equal(back.pdf(ch)[1], res.pdf(ch)[1])
+        assert back.moments(ch)["kurtosis"] == res.moments(ch)["kurtosis"]
+    assert back.channels == res.channels and back.seed == 3
+    assert back.model_parameters["K_hertz"] == 2.1e8
+    assert back.excitation_description["lowpass"] == 40.0
+    assert back.nlbeam_version == nlbeam.__version__
+    assert np.array_equal(back.history["t"], res.history["t"])
+    with pytest.raises(ValueError, match="^ch"):
+        back.psd("v")
+
+
+def _make(seed):
+    return st.BandLimitedNoise((10.0, 60.0), rms=1e-4, seed=seed)
+
+
+def test_ensemble_combines_members_and_is_reproducible():
+    kw = dict(transient=0.5, psd_resolution=2.0, channels=("delta",))
+    model = nlbeam.BeamImpact(K_hertz=0.0)
+    ens = st.ensemble(model, _make, [1, 2, 3], 2.0, processes=2, **kw)
+    again = st.ensemble(model, _make, [1, 2, 3], 2.0, processes=1, **kw)
+    for a, b in zip(ens.members, again.members):
+        assert np.array_equal(a.psd("delta")[1], b.psd("delta")[1])
+    f, mean, lo, hi = ens.psd("delta")
+    assert np.all(lo <= mean) and np.all(mean <= hi)
+    mo = ens.moments("delta")
+    assert mo["ci95_std"][0] <= mo["std"] <= mo["ci95_std"][1]
+    assert ens.members[0].seed == 1
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    (dict(dt=3e-3), "dt"),  # Nyquist 167 Hz < band 200 Hz
+    (dict(channels=("q",)), "channels"),
+    (dict(channels=("x[3]",)), "channels"),
+    (dict(outputs=("spectrum",)), "outputs"),
+    (dict(duration=-1.0), "duration"),
+    (dict(transient=-1.0), "transient"),
+    (dict(psd_resolution=0.01), "psd_resolution"),
+    (dict(keep_history=(2.0, 1.0)), "keep_history"),
+    (dict(store_every=0), "store_every"),
+])
+def test_bad_simulate_inputs(kwargs, name):
+    noise = st.BandLimitedNoise((0.0, 200.0), rms=1e-4, seed=0)
+    args = dict(duration=1.0, transient=0.0)
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=f"^{name}"):
+        st.simulate(nlbeam.BeamImpact(), noise, **args)
+
+
+def test_factory_needs_seed_and_duration_fits_recording():
+    with pytest.raises(ValueError, match="^seed"):
+        st.simulate(nlbeam.BeamImpact(), _make, 1.0)
+    t = np.arange(0, 1.0, 1e-4)
+    rec = st.Recorded(t, 1e-4 * np.sin(2 * np.pi * 30 * t))
+    with pytest.raises(ValueError, match="^duration"):
+        st.simulate(nlbeam.BeamImpact(), rec, 2.0, transient=0.0)
+    res = st.simulate(nlbeam.BeamImpact(), rec, 0.5, transient=0.2, dt=1e-4, outputs=("moments",))
+    assert res.moments("delta")["n"] == 5000
+
+
+def test_import_stochastic_loads_no_h5py_or_matplotlib():
+    code = ("import sys, stochastic; stochastic.simulate; "
+            "print('matplotlib' in sys.modules, 'h5py' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "False"]
