@@ -39,8 +39,10 @@ def expected_welch(S, f_bins, fs, nperseg, span=12):
 @pytest.fixture(scope="module")
 def linear_run():
     model = nlbeam.BeamImpact(K_hertz=0.0)
-    noise = st.BandLimitedNoise((0.0, 100.0), rms=1e-4, seed=21)
-    res = st.simulate(model, noise, 200.0, channels=("delta", "y"), dt=1e-4, store_every=2,
+    # Rayleigh amplitudes: the excitation is a Gaussian process, so the chi-square error
+    # model of the estimates is exact; 1000 s gives ~500 Welch averages
+    noise = st.BandLimitedNoise((5.0, 45.0), rms=1e-4, seed=21, random_amplitudes=True)
+    res = st.simulate(model, noise, 1000.0, channels=("delta", "y"), dt=2.5e-4,
                       psd_resolution=0.25)
     return model, noise, res
 
@@ -49,32 +51,33 @@ def test_linear_response_psd_is_H2_G(linear_run):
     model, noise, res = linear_run
     f, P = res.psd("delta")
     lo, hi = res.psd_interval("delta")
-    sel = (f >= 5.0) & (f <= 60.0)
+    sel = (f >= 8.0) & (f <= 42.0)
     S = lambda nu: np.abs(H_delta(nu)) ** 2 * noise.psd(nu)  # noqa: E731
     E = expected_welch(S, f[sel], res.fs, int(round(res.fs / 0.25)))
     ratio = P[sel] / E
-    rel = res.psd_relative_std("delta")[sel][0]
+    rel = res.psd_relative_std("delta")[sel][0]  # sqrt(2/nu), ~0.046
+    # neighbouring Hann bins are correlated: count n/2 independent ones
     assert abs(ratio.mean() - 1) < 4 * rel / math.sqrt(sel.sum() / 2)
     cover = np.mean((lo[sel] <= E) & (E <= hi[sel]))
-    assert cover >= 0.85, cover
-    # the resonance peak (22.2 Hz) in particular
-    pk = np.argmax(E)
-    assert abs(P[sel][pk] / E[pk] - 1) < 4 * rel
+    assert 0.85 <= cover <= 0.995, cover
+    # the resonance (22.2 Hz, half-power width 0.67 Hz) in particular
+    res_bins = (f[sel] >= 20.0) & (f[sel] <= 24.5)
+    assert abs(ratio[res_bins].mean() - 1) < 4 * rel / math.sqrt(res_bins.sum() / 2)
     # and the excitation channel has the target G
     fy, Py = res.psd("y")
-    s2 = (fy > 5) & (fy < 95)
+    s2 = (fy > 8) & (fy < 42)
     assert abs(np.mean(Py[s2] / noise.psd(fy[s2])) - 1) < 4 * rel / math.sqrt(s2.sum() / 2)
 
 
 def test_linear_response_variance_is_the_integral(linear_run):
     model, noise, res = linear_run
-    fg = np.linspace(0.0, 100.0, 400_001)
+    fg = np.linspace(0.0, 50.0, 400_001)
     var = np.trapezoid(np.abs(H_delta(fg)) ** 2 * noise.psd(fg), fg)
     mo = res.moments("delta")
     assert abs(mo["std"] ** 2 - var) < 4 * mo["se_variance"], (mo["std"] ** 2, var, mo["se_variance"])
     assert abs(mo["skewness"]) < 4 * mo["se_skewness"]
     assert abs(mo["kurtosis"] - 3) < 4 * mo["se_kurtosis"]
-    assert res.n_averages("delta") >= 90 and res.n_impacts == 0
+    assert res.n_averages("delta") >= 450 and res.n_impacts == 0
 
 
 @pytest.mark.parametrize("k_hertz", [0.0, 2.1e8])
