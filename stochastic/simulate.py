@@ -64,6 +64,10 @@ def _extract(tr, kind, i, sel):
 
 
 def _chunk_excitation(excitation, t_a, t_b):
+    from nlbeam.excitation import CosineSum
+
+    if isinstance(excitation, CosineSum) and excitation.tab.shape[0] <= 64:
+        return excitation  # a few cosines: the kernel evaluates them directly
     if hasattr(excitation, "sampled") and not _is_plain_table(excitation):
         return excitation.sampled(t_b, t_start=t_a)
     return excitation
@@ -288,6 +292,9 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
         if seed is None:
             raise ValueError("seed: required when excitation is a factory seed -> excitation")
         excitation = excitation(seed)
+    elif seed is not None and getattr(excitation, "seed", seed) != seed:
+        raise ValueError(f"seed: {seed!r} differs from the excitation's own seed "
+                         f"{excitation.seed!r}; pass a factory seed -> excitation to set it")
     if not hasattr(excitation, "kernel_args"):
         raise ValueError("excitation: must be an nlbeam.Excitation or a stochastic excitation")
     if not hasattr(model, "kernel_arrays"):

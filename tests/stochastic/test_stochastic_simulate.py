@@ -189,8 +189,23 @@ def test_factory_needs_seed_and_duration_fits_recording():
     rec = st.Recorded(t, 1e-4 * np.sin(2 * np.pi * 30 * t))
     with pytest.raises(ValueError, match="^duration"):
         st.simulate(nlbeam.BeamImpact(), rec, 2.0, transient=0.0)
-    res = st.simulate(nlbeam.BeamImpact(), rec, 0.5, transient=0.2, dt=1e-4, outputs=("moments",))
+    seen = []
+    res = st.simulate(nlbeam.BeamImpact(), rec, 0.5, transient=0.2, dt=1e-4, outputs=("moments",),
+                      chunk_duration=0.1, progress=lambda done, total: seen.append((done, total)))
     assert res.moments("delta")["n"] == 5000
+    assert len(seen) == res.n_chunks == 7 and seen[-1] == pytest.approx((0.7, 0.7))
+    assert all(a[0] < b[0] for a, b in zip(seen, seen[1:]))
+    with pytest.raises(ValueError, match="^seed"):
+        st.simulate(nlbeam.BeamImpact(), _make(1), 1.0, seed=2)
+
+
+def test_harmonic_and_realization_excitations_run():
+    """Any nlbeam excitation drives the loop; a 1-cosine Realization equals Harmonic."""
+    model = nlbeam.BeamImpact(K_hertz=0.0)
+    kw = dict(transient=0.0, dt=2e-4, outputs=("moments",), channels=("x",), chunk_duration=0.25)
+    a = st.simulate(model, nlbeam.Harmonic(1e-4, 20.0), 1.0, **kw)
+    b = st.simulate(model, st.Realization(frequencies=[20.0], amplitudes=[1e-4], phases=[0.0]), 1.0, **kw)
+    assert a.moments("x")["std"] == pytest.approx(b.moments("x")["std"], rel=1e-9)
 
 
 def test_import_stochastic_loads_no_h5py_or_matplotlib():
