@@ -1,7 +1,6 @@
 """Streaming estimators equal their batch counterparts, and their stated uncertainties
 are the scatter actually seen."""
 import math
-import warnings
 
 import numpy as np
 import pytest

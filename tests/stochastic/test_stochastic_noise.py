@@ -9,7 +9,6 @@ import pytest
 
 import nlbeam
 import stochastic as st
-from stochastic import _kernels
 
 
 def direct(comp, t):
