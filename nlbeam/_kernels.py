@@ -13,7 +13,25 @@ Discrete state ``disc`` (ne, 2): [in_contact (0/1), delta'_minus].
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit as _njit
+
+# A custom force (nlbeam.System(custom_force=...)) is compiled into a private copy of this
+# module (nlbeam.custom), which sets _USER_FORCE_OVERRIDE before executing it; that copy is not
+# cached on disk. In the default module the hook is a compile-time False and costs nothing.
+_USER_FORCE = globals().get("_USER_FORCE_OVERRIDE", None)
+_HAS_USER = _USER_FORCE is not None
+_CACHE = not _HAS_USER
+
+
+def njit(*args, **kw):
+    kw["cache"] = _CACHE
+    return _njit(*args, **kw)
+
+
+if not _HAS_USER:
+    @_njit(cache=True)
+    def _USER_FORCE(t, x, v, y, yd, params, out):
+        return
 
 # element types
 INACTIVE = -1
@@ -234,7 +252,43 @@ def deriv(t, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, ks, kP, fel):
                 g = dfd * dx + dfdd * dv + dfdv * dvm[e, c]
                 for i in range(N):
                     kP[N + i, c] -= mw[e, i] * g
+    if _HAS_USER:
+        _user_force_terms(t, s, P, want_var, y, yd, sysa, ks, kP)
     return 0
+
+
+@njit(cache=True)
+def _user_force_terms(t, s, P, want_var, y, yd, sysa, ks, kP):
+    """Add M^-1 q of the custom generalised force q(t, x, v, y, y') (N); for the variational
+    equations its Jacobian by forward differences (relative step 1e-7)."""
+    upar = sysa[10]
+    uf = sysa[11]
+    Minv = sysa[12]
+    N = Minv.shape[0]
+    for i in range(N):
+        uf[0, i] = 0.0
+    _USER_FORCE(t, s[:N], s[N:], y, yd, upar, uf[0])
+    for i in range(N):
+        acc = 0.0
+        for j in range(N):
+            acc += Minv[i, j] * uf[0, j]
+        ks[N + i] += acc
+    if want_var:
+        sp = s.copy()
+        m = P.shape[1]
+        for q in range(2 * N):
+            hq = 1e-7 * (abs(s[q]) + 1e-8)
+            sp[q] = s[q] + hq
+            for i in range(N):
+                uf[1, i] = 0.0
+            _USER_FORCE(t, sp[:N], sp[N:], y, yd, upar, uf[1])
+            sp[q] = s[q]
+            for i in range(N):
+                dq = 0.0
+                for j in range(N):
+                    dq += Minv[i, j] * (uf[1, j] - uf[0, j]) / hq
+                for c in range(m):
+                    kP[N + i, c] += dq * P[q, c]
 
 
 # --- one explicit Runge-Kutta step --------------------------------------------------------------

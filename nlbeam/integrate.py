@@ -188,7 +188,7 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
     fcounters = np.zeros(2)
     ev_log = np.zeros((int(event_log), 4))
     h_init = min(dt, 1e-3 / max(excitation.max_frequency(), 1.0))
-    status = _k.integrate_kernel(sysa, xc, xp, xtab, METHODS[method], float(t0), float(t_end),
+    status = model.kernels().integrate_kernel(sysa, xc, xp, xtab, METHODS[method], float(t0), float(t_end),
                                  dt, spc, float(rtol), float(atol), h_init, int(max_steps),
                                  s0, disc, bool(events), bool(want_var), P0, dvm0,
                                  bool(track_xmax), int(store_every), bool(graded), out_t, out_s, out_d, out_f,

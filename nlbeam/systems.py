@@ -179,6 +179,8 @@ class System:
     yd_load: np.ndarray | None = None
     output_dof: int | None = None
     name: str = "System"
+    custom_force: object = None
+    custom_params: tuple = ()
     _arrays: tuple = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -235,9 +237,18 @@ class System:
         object.__setattr__(self, "y_load", yl)
         object.__setattr__(self, "yd_load", ydl)
         object.__setattr__(self, "output_dof", int(out))
+        if self.custom_force is not None and not hasattr(self.custom_force, "py_func"):
+            raise ValueError("custom_force: must be a numba-jitted function "
+                             "force(t, x, v, y, yd, params, out) (see nlbeam.custom)")
+        upar = np.atleast_1d(np.asarray(self.custom_params, dtype=float)).copy()
+        if upar.size == 0:
+            upar = np.zeros(1)
+        if not np.all(np.isfinite(upar)):
+            raise ValueError("custom_params: must be finite")
         arrays = (np.ascontiguousarray(Minv @ K), np.ascontiguousarray(Minv @ C),
                   Minv @ yl, Minv @ ydl, etype, ew, ewy, egap, epar,
-                  np.ascontiguousarray(ew @ Minv.T))
+                  np.ascontiguousarray(ew @ Minv.T), upar, np.zeros((2, N)),
+                  np.ascontiguousarray(Minv))
         object.__setattr__(self, "_arrays", arrays)
 
     # the protocol the analyses use
@@ -256,6 +267,11 @@ class System:
     def kernel_arrays(self):
         """The tuple of arrays the compiled kernels take (see ``nlbeam._kernels``)."""
         return self._arrays
+
+    def kernels(self):
+        """The compiled kernel module for this system (a private copy with a custom force)."""
+        from .custom import kernels_for
+        return kernels_for(self.custom_force)
 
     def natural_frequencies(self):
         """Undamped natural frequencies (Hz) of the linear structure without the elements."""
@@ -279,6 +295,7 @@ def _model_protocol(cls):
     for name in ("n_dof", "n_elements", "output_dof", "excitation_kind"):
         setattr(cls, name, property(lambda self, _n=name: getattr(self.system, _n)))
     cls.kernel_arrays = lambda self: self.system.kernel_arrays()
+    cls.kernels = lambda self: self.system.kernels()
     cls.natural_frequencies = lambda self: self.system.natural_frequencies()
     cls.has_events = lambda self: self.system.has_events()
     return cls

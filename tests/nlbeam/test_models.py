@@ -76,3 +76,27 @@ def test_general_system_validates_matrices():
         nlbeam.System(np.eye(2), np.zeros((3, 3)), np.eye(2))
     with pytest.raises(ValueError, match="^dof:"):
         nlbeam.System(np.eye(2), np.zeros((2, 2)), np.eye(2), (nlbeam.Contact(5, "hertz", 1.0),))
+
+
+def test_a_custom_jitted_force_equals_the_built_in_cubic_spring():
+    from numba import njit
+
+    @njit
+    def cubic(t, x, v, y, yd, params, out):
+        out[0] -= params[0] * x[0] ** 3
+
+    ex = nlbeam.Harmonic(0.2, 0.15)
+    duff = nlbeam.Duffing(m=1.0, b=0.1, k=1.0, k3=1.0)
+    custom = nlbeam.System([[1.0]], [[0.1]], [[1.0]], (), "force", y_load=[1.0], yd_load=[0.0],
+                           custom_force=cubic, custom_params=[1.0])
+    a = nlbeam.integrate(duff, ex, 20.0, dt=0.01, x0=[0.3, 0.0])
+    b = nlbeam.integrate(custom, ex, 20.0, dt=0.01, x0=[0.3, 0.0])
+    np.testing.assert_allclose(b.x, a.x, rtol=0, atol=1e-13)
+    fa = nlbeam.flow(duff, ex, [0.3, 0.0], 0.0, 5.0, monodromy=True, dt=0.01)
+    fb = nlbeam.flow(custom, ex, [0.3, 0.0], 0.0, 5.0, monodromy=True, dt=0.01)
+    np.testing.assert_allclose(fb.monodromy, fa.monodromy, rtol=1e-5, atol=1e-6)
+
+
+def test_custom_force_must_be_jitted():
+    with pytest.raises(ValueError, match="^custom_force:"):
+        nlbeam.System([[1.0]], [[0.0]], [[1.0]], (), "force", custom_force=lambda *a: None)
