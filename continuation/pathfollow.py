@@ -89,7 +89,10 @@ class Tracer:
         w, wp = prob.scale_u, prob.scale_p
         z = zeta_pred.copy()
         for it in range(1, self.max_iter + 1):
-            ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=True, jac_p=True)
+            try:
+                ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=True, jac_p=True)
+            except ConvergenceError:
+                break
             self.n_evaluations += 1
             r, J = _scaled(ev, w, wp)
             G = np.r_[r, t @ (z - zeta_pred)]
@@ -103,7 +106,10 @@ class Tracer:
             z = z + dz
             if np.max(np.abs(dz)) < 1e-3 * self.tol or (np.max(np.abs(r)) < self.tol and
                                                           np.max(np.abs(dz)) < 1e-6):
-                ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=True, jac_p=True)
+                try:
+                    ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=True, jac_p=True)
+                except ConvergenceError:
+                    break
                 self.n_evaluations += 1
                 r, J = _scaled(ev, w, wp)
                 if np.max(np.abs(r)) < self.tol * 10:

@@ -148,8 +148,14 @@ class ShootingProblem:
 
     def _flow(self, model, ex, s, t0, dur, dt, mono):
         it = self.integrator
-        return nlbeam.flow(model, ex, s, t0, dur, monodromy=mono, method=it.method, dt=dt,
-                           steps_per_contact=it.steps_per_contact, rtol=it.rtol, atol=it.atol)
+        try:
+            return nlbeam.flow(model, ex, s, t0, dur, monodromy=mono, method=it.method, dt=dt,
+                               steps_per_contact=it.steps_per_contact, rtol=it.rtol,
+                               atol=it.atol, max_steps=int(50 * dur / dt) + 20000)
+        except nlbeam.IntegrationError as exc:
+            # an iterate far from any orbit (e.g. a huge penetration): a failed Newton step
+            raise ConvergenceError(f"shooting: integration failed ({exc}); try a smaller step "
+                                   "or a better guess") from None
 
     def _map(self, U, p, mono):
         """Flows of all segments at parameter p: (ends (m, 2N), [monodromies], xmax)."""

@@ -1,0 +1,524 @@
+"""Frequency-response diagrams: branches of every order, their bifurcations, save and load."""
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+import nlbeam
+
+from ._newton import ConvergenceError
+from .pathfollow import Tracer
+from .shooting import (Integrator, ShootingProblem, _problem_from_state, decay_rate,
+                       solve_problem)
+
+
+@dataclass
+class Branch:
+    """One traced branch (n points). order: period = order / f. parameter: the continued
+    parameter's name, values (n,) its values; frequency (n,) Hz, amplitude (n,); xmax (n,) m;
+    stable (n,) bool; multipliers (n, 2N) complex (largest modulus first); state0 (n, 2N) the
+    state at t = 0; states (n, m, 2N) at the shooting boundaries, boundaries (n, m) their
+    excitation phases (periods); origin: 'brute-force', 'period-doubling' or 'start'."""
+
+    order: int
+    parameter: str
+    values: np.ndarray
+    frequency: np.ndarray
+    amplitude: np.ndarray
+    xmax: np.ndarray
+    stable: np.ndarray
+    multipliers: np.ndarray
+    state0: np.ndarray
+    states: np.ndarray
+    boundaries: np.ndarray
+    origin: str = "start"
+
+
+@dataclass
+class Bifurcation:
+    """kind: 'fold', 'period-doubling' or 'neimark-sacker'; frequency (Hz) and value of the
+    continued parameter at the point, located to ``tolerance`` (width of the final bracket in
+    the parameter); xmax (m); order of the branch it lies on; branch index; multipliers."""
+
+    kind: str
+    frequency: float
+    value: float
+    xmax: float
+    order: int
+    branch: int
+    tolerance: float
+    multipliers: np.ndarray
+    state0: np.ndarray | None = None
+
+
+@dataclass
+class Superharmonic:
+    """A peak of the harmonic branch dominated by the harmonic ``harmonic`` of f."""
+
+    frequency: float
+    xmax: float
+    harmonic: int
+    branch: int
+
+
+@dataclass
+class FrequencyResponse:
+    """A diagram: branches, bifurcations and superharmonic peaks, with what produced them."""
+
+    model_parameters: dict
+    amplitude: float
+    parameter: str
+    p_range: tuple
+    branches: list = field(default_factory=list)
+    bifurcations: list = field(default_factory=list)
+    superharmonics: list = field(default_factory=list)
+    settings: dict = field(default_factory=dict)
+    wall_time: float = 0.0
+    n_points: int = 0
+    version: str = nlbeam.__version__
+
+    def save(self, path):
+        """Write to HDF5 (atomically: a temporary file in the same folder, then os.replace)."""
+        import h5py
+
+        path = os.fspath(path)
+        d = os.path.dirname(os.path.abspath(path))
+        fd, tmp = tempfile.mkstemp(suffix=".h5.tmp", dir=d)
+        os.close(fd)
+        try:
+            with h5py.File(tmp, "w") as h:
+                h.attrs["version"] = self.version
+                h.attrs["amplitude"] = self.amplitude
+                h.attrs["parameter"] = self.parameter
+                h.attrs["p_range"] = np.asarray(self.p_range, dtype=float)
+                h.attrs["wall_time"] = self.wall_time
+                h.attrs["n_points"] = self.n_points
+                for k, v in self.model_parameters.items():
+                    h.attrs[f"model.{k}"] = v
+                for k, v in self.settings.items():
+                    h.attrs[f"settings.{k}"] = "None" if v is None else v
+                g = h.create_group("branches")
+                for i, b in enumerate(self.branches):
+                    gb = g.create_group(f"{i:04d}")
+                    gb.attrs["order"] = b.order
+                    gb.attrs["parameter"] = b.parameter
+                    gb.attrs["origin"] = b.origin
+                    for name in ("values", "frequency", "amplitude", "xmax", "stable",
+                                 "multipliers", "state0", "states", "boundaries"):
+                        gb.create_dataset(name, data=np.asarray(getattr(b, name)))
+                gf = h.create_group("bifurcations")
+                bif = self.bifurcations
+                gf.create_dataset("kind", data=np.array([b.kind for b in bif], dtype="S16"))
+                for name in ("frequency", "value", "xmax", "order", "branch", "tolerance"):
+                    gf.create_dataset(name, data=np.array([getattr(b, name) for b in bif],
+                                                          dtype=float))
+                n2 = max([len(b.multipliers) for b in bif], default=0)
+                mu = np.zeros((len(bif), n2), dtype=complex)
+                for i, b in enumerate(bif):
+                    mu[i, :len(b.multipliers)] = b.multipliers
+                gf.create_dataset("multipliers", data=mu)
+                n2 = max([len(b.state0) for b in bif if b.state0 is not None], default=0)
+                st = np.full((len(bif), n2), np.nan)
+                for i, b in enumerate(bif):
+                    if b.state0 is not None:
+                        st[i] = b.state0
+                gf.create_dataset("state0", data=st)
+                gs = h.create_group("superharmonics")
+                for name in ("frequency", "xmax", "harmonic", "branch"):
+                    gs.create_dataset(name, data=np.array([getattr(s, name) for s in
+                                                           self.superharmonics], dtype=float))
+            os.replace(tmp, path)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.remove(tmp)
+            raise
+
+
+def load(path):
+    """Read a FrequencyResponse written by ``FrequencyResponse.save``."""
+    import h5py
+
+    def s(v):
+        return v.decode() if isinstance(v, bytes) else (v.item() if hasattr(v, "item") else v)
+
+    with h5py.File(path, "r") as h:
+        a = h.attrs
+        model = {k[6:]: s(a[k]) for k in a if k.startswith("model.")}
+        settings = {k[9:]: s(a[k]) for k in a if k.startswith("settings.")}
+        frc = FrequencyResponse(model_parameters=model, amplitude=float(a["amplitude"]),
+                                parameter=s(a["parameter"]), p_range=tuple(a["p_range"]),
+                                settings=settings, wall_time=float(a["wall_time"]),
+                                n_points=int(a["n_points"]), version=s(a["version"]))
+        for key in sorted(h["branches"]):
+            gb = h["branches"][key]
+            frc.branches.append(Branch(
+                order=int(gb.attrs["order"]), parameter=s(gb.attrs["parameter"]),
+                origin=s(gb.attrs["origin"]),
+                **{n: gb[n][()] for n in ("values", "frequency", "amplitude", "xmax", "stable",
+                                          "multipliers", "state0", "states", "boundaries")}))
+        gf = h["bifurcations"]
+        for i in range(len(gf["kind"])):
+            frc.bifurcations.append(Bifurcation(
+                kind=gf["kind"][i].decode(), frequency=float(gf["frequency"][i]),
+                value=float(gf["value"][i]), xmax=float(gf["xmax"][i]),
+                order=int(gf["order"][i]), branch=int(gf["branch"][i]),
+                tolerance=float(gf["tolerance"][i]), multipliers=gf["multipliers"][i],
+                state0=gf["state0"][i]))
+        gs = h["superharmonics"]
+        for i in range(len(gs["frequency"])):
+            frc.superharmonics.append(Superharmonic(
+                frequency=float(gs["frequency"][i]), xmax=float(gs["xmax"][i]),
+                harmonic=int(gs["harmonic"][i]), branch=int(gs["branch"][i])))
+    return frc
+
+
+# --- building branches ---------------------------------------------------------------------------
+def _to_branch(points, order, parameter, origin):
+    n = len(points)
+    probs = [p.problem for p in points]
+    values = np.array([p.p for p in points])
+    freq = np.empty(n)
+    amp = np.empty(n)
+    st0 = []
+    for i, pt in enumerate(points):
+        m, A, f = pt.problem.setup(pt.p)
+        freq[i], amp[i] = f, A
+        st0.append(pt.problem.state_at_zero(pt.u, pt.p)[0])
+    mu = np.array([p.multipliers for p in points])
+    return Branch(order=order, parameter=parameter, values=values, frequency=freq, amplitude=amp,
+                  xmax=np.array([p.xmax for p in points]),
+                  stable=np.abs(mu[:, 0]) < 1.0, multipliers=mu, state0=np.array(st0),
+                  states=np.array([p.u.reshape(pr.n_seg, pr.N2) for p, pr in zip(points, probs)]),
+                  boundaries=np.array([pr.boundaries for pr in probs]), origin=origin)
+
+
+def _both_ways(tracer, prob, u, p, stop=None):
+    fwd, loc_f, reason = tracer.trace(prob, u, p, direction=1, stop=stop)
+    if reason == "closed":
+        return fwd, loc_f
+    bwd, loc_b, _ = tracer.trace(prob, u, p, direction=-1, stop=stop)
+    nb = len(bwd)
+    pts = bwd[::-1][:-1] + fwd
+    for L in loc_b:
+        L.index = nb - 2 - L.index
+    for L in loc_f:
+        L.index += nb - 1
+    return pts, loc_b + loc_f
+
+
+def _minimal_order(prob, u, p, tol=1e-6):
+    """The smallest k dividing the order such that the orbit repeats after k / f."""
+    n = prob.order
+    model, A, f = prob.setup(p)
+    U = np.asarray(u).reshape(prob.n_seg, prob.N2)
+    w = prob.scale_u[:prob.N2]
+    for k in range(1, n):
+        if n % k:
+            continue
+        fl = nlbeam.flow(model, nlbeam.Harmonic(A, f), U[0], prob.boundaries[0] / f, k / f,
+                         method=prob.integrator.method, rtol=prob.integrator.rtol,
+                         atol=prob.integrator.atol,
+                         dt=1.0 / (f * prob.steps_per_period) if prob.steps_per_period else None)
+        if np.max(np.abs(fl.state - U[0]) / w) < tol:
+            return k
+    return n
+
+
+def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=1e-3):
+    """Periodic attractors from integrations on a frequency grid, sweeping up and down (the state
+    carried over). Returns a list of (frequency, order, state at t = 0)."""
+    found = []
+    rate = decay_rate(model)
+    nmax = max(orders)
+    for sweep in (freqs, freqs[::-1]):
+        x = None
+        for f in sweep:
+            spp = integrator.steps_per_period(model, f) or 200
+            n_tr = int(min(4000, max(40, math.ceil(efolds / rate * f))))
+            n_tot = n_tr + 4 * nmax
+            tr = nlbeam.integrate(model, nlbeam.Harmonic(amplitude, f), n_tot / f,
+                                  method=integrator.method, dt=1.0 / (f * spp), x0=x,
+                                  store_every=spp, steps_per_contact=integrator.steps_per_contact,
+                                  rtol=integrator.rtol, atol=integrator.atol)
+            S = np.hstack([tr.x, tr.v])[: n_tot + 1]
+            x = tr.state_end
+            tail = S[-(3 * nmax + 1):]
+            sc = np.max(np.abs(tail), axis=0) + 1e-300
+            for n in sorted(orders):
+                r = np.max(np.abs(tail[n:] - tail[:-n]) / sc)
+                if r < settle:
+                    found.append((float(f), n, S[-1].copy()))
+                    break
+    return found
+
+
+def _covered(branches, order, f, xmax, rel=2e-3):
+    for b in branches:
+        if b.order != order:
+            continue
+        fr, xm = b.frequency, b.xmax
+        for i in range(len(fr) - 1):
+            lo, hi = sorted((fr[i], fr[i + 1]))
+            if lo <= f <= hi:
+                x = xm[i] + (xm[i + 1] - xm[i]) * ((f - fr[i]) / (fr[i + 1] - fr[i])
+                                                    if fr[i + 1] != fr[i] else 0.0)
+                if abs(x - xmax) <= rel * xmax:
+                    return True
+    return False
+
+
+def _dominant_harmonic(prob, u, p):
+    """The harmonic of f with the largest amplitude in x (output DOF) over one period."""
+    tr = prob.trajectory(u, p, n_samples=512)
+    x = tr.x[:-1, prob.out]
+    n = len(x)
+    X = np.abs(np.fft.rfft(x - x.mean())) / n
+    k = int(np.argmax(X[1:])) + 1
+    return k // prob.order if prob.order > 1 else k
+
+
+def _switch(tracer, pt, order):
+    """Start the period-2T branch at a period-doubling point: the problem of twice the order
+    with the -1 eigenvector as predictor direction. Returns (problem, u, p, t0) or None."""
+    prob = pt.problem
+    model, A, f = prob.setup(pt.p)
+    U = pt.u.reshape(prob.n_seg, prob.N2)
+    ev = prob.evaluate(pt.u, pt.p, jac=True, jac_p=False)
+    M = prob.monodromy(ev.Ms)
+    mu, V = np.linalg.eig(M)
+    i = int(np.argmin(np.abs(mu + 1)))
+    v = V[:, i].real
+    vs = [v]
+    for Mj in ev.Ms[:-1]:
+        vs.append(Mj @ vs[-1])
+    b2 = np.r_[prob.boundaries, prob.boundaries + prob.order]
+    P2 = ShootingProblem(prob.base_model, prob.amplitude, prob.frequency, 2 * prob.order, b2,
+                         prob.integrator, parameter=prob.parameter,
+                         steps_per_period=prob.steps_per_period, scale_p=prob.scale_p)
+    P2.sel_clearance = None if prob.sel_clearance is None else np.r_[prob.sel_clearance,
+                                                                     prob.sel_clearance]
+    u2 = np.r_[U.ravel(), U.ravel()]
+    P2.scale_u = np.r_[prob.scale_u, prob.scale_u]
+    d = np.r_[np.concatenate(vs), -np.concatenate(vs)] / P2.scale_u
+    t0 = np.r_[d, 0.0]
+    t0 /= np.linalg.norm(t0)
+    return P2, u2, pt.p, t0
+
+
+def _halves_distance(pt):
+    prob = pt.problem
+    model, A, f = prob.setup(pt.p)
+    U = pt.u.reshape(prob.n_seg, prob.N2)
+    half = prob.order // 2
+    fl = nlbeam.flow(model, nlbeam.Harmonic(A, f), U[0], prob.boundaries[0] / f, half / f,
+                     method=prob.integrator.method, rtol=prob.integrator.rtol,
+                     atol=prob.integrator.atol,
+                     dt=1.0 / (f * prob.steps_per_period) if prob.steps_per_period else None)
+    return float(np.max(np.abs(fl.state - U[0]) / prob.scale_u[:prob.N2]))
+
+
+def _trace_switched(tracer, pt, order):
+    P2, u2, p, t0 = _switch(tracer, pt, order)
+    d0 = [None, 0.0]
+
+    def stop(q):
+        d = _halves_distance(q)
+        if d0[0] is None:
+            d0[0] = d
+        d0[1] = max(d0[1], d)
+        return d0[1] > 5 * d0[0] and d < 0.05 * d0[1]
+
+    # first point off the parent branch: a step along the eigenvector
+    w, wp = P2.scale_u, P2.scale_p
+    z0 = np.r_[u2 / w, p / wp]
+    ds = 0.02
+    for _ in range(8):
+        try:
+            z1, ev1, _ = tracer.correct(P2, z0 + ds * t0, t0)
+            break
+        except ConvergenceError:
+            ds *= 0.5
+    else:
+        return None
+    u1, p1 = z1[:-1] * w, z1[-1] * wp
+    # orient along the direction away from the PD point
+    pts, loc, reason = tracer.trace(P2, u1, p1, stop=stop, t0=(z1 - z0) / np.linalg.norm(z1 - z0))
+    if _halves_distance(pts[0]) < 1e-6:
+        return None
+    return pts, loc
+
+
+def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer, integrator,
+                 segments, n_grid, switch, starts, brute):
+    branches, bifs, pd_points = [], [], []
+    t_start = time.perf_counter()
+    cand = []
+    if brute and parameter == "frequency":
+        grid = np.linspace(p_range[0], p_range[1], n_grid)
+        cand = brute_force(model, amplitude, grid, orders, integrator)
+    for s in starts:
+        cand.append(s)
+
+    def add(points, located, order, origin):
+        bi = len(branches)
+        branches.append(_to_branch(points, order, parameter, origin))
+        for L in located:
+            m_, A_, f_ = L.point.problem.setup(L.point.p)
+            bifs.append(Bifurcation(L.kind, float(f_), float(L.point.p), float(L.point.xmax),
+                                    order, bi, float(L.tolerance), L.point.multipliers,
+                                    L.point.problem.state_at_zero(L.point.u, L.point.p)[0]))
+            if L.kind == "period-doubling":
+                pd_points.append((L.point, order, bi))
+
+    handled = set()
+    for order in sorted(orders):
+        for (f, n, s0) in cand:
+            if n != order:
+                continue
+            A = amplitude
+            pval = f if parameter == "frequency" else None
+            try:
+                prob, u0 = _problem_from_state(model, A, f if parameter == "frequency"
+                                               else frequency, order, s0, segments, integrator)
+                if parameter != "frequency":
+                    prob.parameter = parameter
+                    prob.scale_p = max(abs(prob.value()), 1e-300)
+                    pval = prob.value()
+                sol_prob, u, p = _polish(prob, u0, pval, tracer.tol)
+            except ConvergenceError:
+                continue
+            if _minimal_order(sol_prob, u, p) != order:
+                continue
+            ev = sol_prob.evaluate(u, p, jac=False, jac_p=False)
+            if _covered(branches, order, f, ev.xmax):
+                continue
+            pts, loc = _both_ways(tracer, sol_prob, u, p)
+            add(pts, loc, order, "brute-force" if len(starts) == 0 or (f, n, s0) not in starts
+                else "start")
+        # branch switching at period doublings of this order
+        if switch and 2 * order in orders:
+            for k, (pt, o, bi) in enumerate(pd_points):
+                if o != order or k in handled:
+                    continue
+                handled.add(k)
+                res = _trace_switched(tracer, pt, order)
+                if res is None:
+                    continue
+                pts, loc = res
+                add(pts, loc, 2 * order, "period-doubling")
+                end = pts[-1]
+                for k2, (pt2, o2, bi2) in enumerate(pd_points):
+                    if o2 == order and k2 not in handled and \
+                            abs(pt2.p - end.p) < 1e-3 * abs(end.p) + 1e-12:
+                        handled.add(k2)
+    return branches, bifs, time.perf_counter() - t_start
+
+
+def _polish(prob, u0, p, tol):
+    """Newton at fixed p, moving the boundaries out of contact once if needed."""
+    u, ev, res, it = prob.solve(u0, p, tol=tol)
+    if prob.needs_rephase(u, p) or np.any(prob.boundary_clearance(u, p) <= 0):
+        prob, u = prob.rephased(u, p)
+        u, ev, res, it = prob.solve(u, p, tol=tol)
+    return prob, u, p
+
+
+def _superharmonics(branches, model, integrator):
+    out = []
+    for bi, b in enumerate(branches):
+        if b.order != 1 or len(b.xmax) < 3:
+            continue
+        x = b.xmax
+        for i in range(1, len(x) - 1):
+            if x[i] > x[i - 1] and x[i] >= x[i + 1]:
+                prob = ShootingProblem(model, b.amplitude[i], b.frequency[i], 1,
+                                       b.boundaries[i], integrator)
+                prob.scale_u = prob.make_scale(b.states[i].ravel(), prob.value())
+                k = _dominant_harmonic(prob, b.states[i].ravel(), prob.value())
+                if k >= 2:
+                    out.append(Superharmonic(float(b.frequency[i]), float(x[i]), k, bi))
+    return out
+
+
+def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30, segments=1,
+                       integrator=None, switch=True, brute_force_grid=True, starts=(),
+                       ds=0.02, ds_max=0.08, max_angle=0.15, max_points=3000, tol=1e-10,
+                       bif_tol=1e-10, **integrator_kw):
+    """The |x|max-versus-frequency diagram at excitation amplitude (m, or N for force).
+
+    f_range: (f_lo, f_hi) Hz. Branches of each order in ``orders`` start from periodic
+    attractors found by integration on a grid of n_grid frequencies (sweeping up and down;
+    isolas too) and by branch switching at period doublings (order n -> 2n). Each branch is
+    followed by pseudo-arclength continuation (adaptive step ds in scaled units, at most
+    max_angle rad between tangents) until it leaves f_range or closes. Folds, period doublings
+    and Neimark-Sacker points are located to a bracket of bif_tol relative width in f.
+    starts: extra (frequency, order, state at t = 0) starting points.
+    Returns a FrequencyResponse.
+    """
+    integrator = integrator or Integrator(**integrator_kw)
+    f_lo, f_hi = map(float, f_range)
+    if not (0 < f_lo < f_hi):
+        raise ValueError(f"f_range: must be (f_lo, f_hi) with 0 < f_lo < f_hi Hz, got {f_range!r}")
+    orders = tuple(sorted(set(int(o) for o in orders)))
+    tracer = Tracer(p_min=f_lo, p_max=f_hi, ds=ds, ds_max=ds_max, max_angle=max_angle,
+                    max_points=max_points, tol=tol, bif_tol=bif_tol)
+    t0 = time.perf_counter()
+    branches, bifs, _ = _run_diagram(model, amplitude, (f_lo, f_hi), orders, "frequency", None,
+                                     tracer, integrator, segments, n_grid, switch, list(starts),
+                                     brute_force_grid)
+    sup = _superharmonics(branches, model, integrator)
+    frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=float(amplitude),
+                            parameter="frequency", p_range=(f_lo, f_hi), branches=branches,
+                            bifurcations=bifs, superharmonics=sup,
+                            settings=_settings(integrator, segments, n_grid, ds, ds_max,
+                                               max_angle, tol, bif_tol, orders))
+    frc.wall_time = time.perf_counter() - t0
+    frc.n_points = int(sum(len(b.values) for b in branches))
+    return frc
+
+
+def continue_parameter(solution, parameter, p_range, *, model, segments=1, integrator=None,
+                       ds=0.02, ds_max=0.08, max_angle=0.15, max_points=3000, tol=1e-10,
+                       bif_tol=1e-10, **integrator_kw):
+    """Follow a PeriodicSolution of ``model`` in ``parameter`` ('amplitude', 'frequency', or a
+    model field such as 'e' or 'K_hertz') over p_range, both ways. Returns a FrequencyResponse
+    with one branch (and the bifurcations on it)."""
+    integrator = integrator or Integrator(**integrator_kw)
+    lo, hi = map(float, p_range)
+    tracer = Tracer(p_min=lo, p_max=hi, ds=ds, ds_max=ds_max, max_angle=max_angle,
+                    max_points=max_points, tol=tol, bif_tol=bif_tol)
+    t0 = time.perf_counter()
+    prob, u0 = _problem_from_state(model, solution.amplitude, solution.frequency, solution.order,
+                                   solution.state0, segments, integrator)
+    prob.parameter = parameter
+    prob.scale_p = max(abs(prob.value()), 1e-300)
+    prob, u, p = _polish(prob, u0, prob.value(), tol)
+    pts, loc = _both_ways(tracer, prob, u, p)
+    br = _to_branch(pts, solution.order, parameter, "start")
+    bifs = []
+    for L in loc:
+        m_, A_, f_ = L.point.problem.setup(L.point.p)
+        bifs.append(Bifurcation(L.kind, float(f_), float(L.point.p), float(L.point.xmax),
+                                solution.order, 0, float(L.tolerance), L.point.multipliers,
+                                L.point.problem.state_at_zero(L.point.u, L.point.p)[0]))
+    frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=solution.amplitude,
+                            parameter=parameter, p_range=(lo, hi), branches=[br],
+                            bifurcations=bifs,
+                            settings=_settings(integrator, segments, 0, ds, ds_max, max_angle,
+                                               tol, bif_tol, (solution.order,)))
+    frc.wall_time = time.perf_counter() - t0
+    frc.n_points = len(br.values)
+    return frc
+
+
+def _settings(integ, segments, n_grid, ds, ds_max, max_angle, tol, bif_tol, orders):
+    return {"method": integ.method, "dt_scale": integ.dt_scale,
+            "steps_per_contact": integ.steps_per_contact, "rtol": integ.rtol, "atol": integ.atol,
+            "segments": segments, "n_grid": n_grid, "ds": ds, "ds_max": ds_max,
+            "max_angle": max_angle, "tol": tol, "bif_tol": bif_tol,
+            "orders": ",".join(map(str, orders))}
