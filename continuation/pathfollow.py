@@ -106,10 +106,12 @@ class Tracer:
             z = z + dz
             if np.max(np.abs(dz)) < 1e-3 * self.tol or (np.max(np.abs(r)) < self.tol and
                                                           np.max(np.abs(dz)) < 1e-6):
+                Jp_prev = ev.Jp
                 try:
-                    ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=True, jac_p=True)
+                    ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=True, jac_p=False)
                 except ConvergenceError:
                     break
+                ev.Jp = Jp_prev  # dR/dp one Newton step back: good enough for the tangent
                 self.n_evaluations += 1
                 r, J = _scaled(ev, w, wp)
                 if np.max(np.abs(r)) < self.tol * 10:

@@ -159,8 +159,11 @@ class ShootingProblem:
 
     def _map(self, U, p, mono):
         """Flows of all segments at parameter p: (ends (m, 2N), [monodromies], xmax)."""
-        model, A, f = self.setup(p)
-        ex = nlbeam.Harmonic(A, f)
+        try:
+            model, A, f = self.setup(p)
+            ex = nlbeam.Harmonic(A, f)
+        except ValueError as exc:  # the predictor left the parameter's domain
+            raise ConvergenceError(f"shooting: {exc}") from None
         ends = np.empty_like(U)
         Ms = []
         xm = 0.0
@@ -183,7 +186,8 @@ class ShootingProblem:
 
     def evaluate(self, u, p, jac=True, jac_p=True):
         """Residual R (n,) of u (n,) at parameter p; with jac the Jacobian dR/du (n, n) and the
-        monodromies of the segments; with jac_p dR/dp (n,) by central differences."""
+        monodromies of the segments; with jac_p dR/dp (n,) by a forward difference (it only
+        steers Newton and the predictor; the solution does not depend on it)."""
         U = np.asarray(u, dtype=float).reshape(self.n_seg, self.N2)
         ends, Ms, xm = self._map(U, p, jac)
         R = (ends - np.roll(U, -1, axis=0)).ravel()
@@ -197,10 +201,9 @@ class ShootingProblem:
                 Ju[j * k:(j + 1) * k, jn * k:(jn + 1) * k] -= np.eye(k)
         Jp = None
         if jac_p:
-            h = 1e-6 * self.scale_p
+            h = 1e-7 * self.scale_p
             e_hi = self._map(U, p + h, False)[0]
-            e_lo = self._map(U, p - h, False)[0]
-            Jp = ((e_hi - e_lo) / (2 * h)).ravel()
+            Jp = ((e_hi - ends) / h).ravel()
         return Evaluation(R, Ju, Jp, Ms, xm)
 
     # --- derived quantities -----------------------------------------------------------------
