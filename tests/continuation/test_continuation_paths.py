@@ -174,3 +174,30 @@ def test_import_does_not_load_matplotlib_or_h5py():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          cwd=root, check=True)
     assert out.stdout.split() == ["False", "False"]
+
+
+@pytest.mark.parametrize("parameter,lo,hi", [("amplitude", 0.9e-4, 1.1e-4), ("e", 0.45, 0.55)])
+def test_continuation_in_other_parameters_lands_on_direct_solutions(parameter, lo, hi):
+    m = nlbeam.BeamImpact.paper()
+    sol = C.periodic_solution(m, 1e-4, 44.0)
+    frc = C.continue_parameter(sol, parameter, (lo, hi), model=m)
+    b = frc.branches[0]
+    assert b.values.min() <= lo and b.values.max() >= hi
+    i = len(b.values) // 3
+    v = b.values[i]
+    if parameter == "amplitude":
+        direct = C.periodic_solution(m, v, 44.0, guess=b.state0[i])
+    else:
+        direct = C.periodic_solution(m.replace(e=v), 1e-4, 44.0, guess=b.state0[i])
+    assert abs(direct.xmax - b.xmax[i]) < 1e-7 * direct.xmax
+
+
+def test_plot_draws_branches_and_marks(pd_diagram, tmp_path):
+    import matplotlib
+    matplotlib.use("Agg")
+    from continuation.plot import plot_frequency_response
+    m, frc = pd_diagram
+    ax = plot_frequency_response(frc)
+    dashed = [l for l in ax.lines if l.get_linestyle() == "--"]
+    assert dashed  # unstable parts drawn dashed
+    ax.figure.savefig(tmp_path / "f.png")
