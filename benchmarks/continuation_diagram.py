@@ -2,8 +2,8 @@
 
 A = 0.1 mm, 5-150 Hz, orders 1-3. Reports the wall time (JIT cache warm), the number of
 points, and how the located fold / period-doubling frequencies of the harmonic branch change as
-the step is refined (dt_scale 1, 1/2, 1/4, 1/8; significant digits that agree between the last
-two). Saves figures/frc_paper.png and figures/frc_paper.h5.
+the step is refined (dt_scale 1, 1/2, 1/4, 1/8 of the free-flight step, with steps_per_contact
+32 / dt_scale; significant digits that agree between the last two). Saves figures/frc_paper.png and figures/frc_paper.h5.
 
     python benchmarks/continuation_diagram.py [--quick]
 """
@@ -27,7 +27,7 @@ A = 1e-4
 def relocate(model, bif, dt_scale, half_width=0.3):
     """Locate one bifurcation of the harmonic branch again with a finer step: continue from a
     nearby solution over a narrow window and take the bifurcation of the same kind there."""
-    integ = C.Integrator(dt_scale=dt_scale)
+    integ = C.Integrator(dt_scale=dt_scale, steps_per_contact=32 / dt_scale)
     side = -0.5 * half_width if bif.kind == "fold" else 0.0
     f0 = bif.frequency + side
     sol = C.periodic_solution(model, A, bif.frequency, guess=bif.state0, integrator=integ) \
