@@ -111,6 +111,7 @@ class Flow:
     dvminus_dvminus0: np.ndarray | None
     n_steps: int
     n_rhs: int
+    min_steps_per_contact: int = -1
 
 
 def _prepare(model, excitation, method, dt, steps_per_contact, t0, t_end):
@@ -165,7 +166,8 @@ def _initial(model, x0, disc0, t0, excitation):
 
 
 def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc,
-         events, want_var, P0, dvm0, track_xmax, store_every, graded=True, event_log=0):
+         events, want_var, P0, dvm0, track_xmax, store_every, graded=True, event_log=0,
+         warn=True):
     sysa = model.kernel_arrays()
     xc, xp, xtab = excitation.kernel_args()
     N = model.n_dof
@@ -196,7 +198,7 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
     if status != 0:
         raise IntegrationError(_status_message(status, fcounters[0], method))
     n = counters[0]
-    if counters[6] > 0 and method != "adaptive" and counters[5] < MIN_STEPS_PER_CONTACT:
+    if warn and counters[6] > 0 and method != "adaptive" and counters[5] < MIN_STEPS_PER_CONTACT:
         warnings.warn(f"a contact was resolved with only {counters[5]} steps (< "
                       f"{MIN_STEPS_PER_CONTACT}): the result is inaccurate; reduce dt or raise "
                       "steps_per_contact", RuntimeWarning, stacklevel=3)
@@ -207,7 +209,7 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
 
 def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.0,
               disc0=None, store_every=1, steps_per_contact=None, rtol=1e-8, atol=1e-12,
-              events=True, graded=True, event_log=10_000, max_steps=100_000_000):
+              events=True, graded=True, event_log=10_000, warn=True, max_steps=100_000_000):
     """Integrate ``model`` driven by ``excitation`` from t0 to t_end (s).
 
     method: 'rk2' (the paper's constant-step scheme, Heun), 'rk4', both with step ``dt`` (s)
@@ -220,6 +222,8 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
     their order across the delta^1.5 singularity of Hertz-type contact forces. x0: initial state [x_1..x_N, v_1..v_N] (default: at rest).
     store_every: keep every k-th grid sample (0: none, only the end state).
     event_log: how many contact events to record in ``Trajectory.events`` (memory bound).
+    warn: warn when a contact got fewer than 8 steps (``Trajectory.min_steps_per_contact`` tells
+    in any case).
     Returns a :class:`Trajectory`.
     """
     dt, spc = _prepare(model, excitation, method, dt, steps_per_contact, t0, t_end)
@@ -235,7 +239,7 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
     dvm0 = np.zeros((ne, 1))
     (t, S, D, F, s_end, disc_end, _, _, xmax, c, fc, evl) = _run(
         model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc, events,
-        False, P0, dvm0, True, store_every, graded, event_log)
+        False, P0, dvm0, True, store_every, graded, event_log, warn)
     return Trajectory(t=t, x=S[:, :N], v=S[:, N:], delta=D, force=F, n_impacts=int(c[4]),
                       state_end=s_end, disc_end=disc_end, t_end=float(t_end), method=method,
                       dt=dt, steps_per_contact=spc, n_steps=int(c[1]), n_rejected=int(c[2]),
@@ -246,7 +250,7 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
 
 def flow(model, excitation, state0, t0, duration, *, monodromy=False, disc0=None,
          method="rk4", dt=None, steps_per_contact=None, rtol=1e-10, atol=1e-14, events=True,
-         graded=True, max_steps=100_000_000):
+         graded=True, warn=True, max_steps=100_000_000):
     """The state at t0 + duration (s) from ``state0`` at t0, with ``xmax`` over the interval.
 
     With ``monodromy=True`` the variational equations are integrated alongside with the same
@@ -277,7 +281,7 @@ def flow(model, excitation, state0, t0, duration, *, monodromy=False, disc0=None
         dvm0 = np.zeros((ne, 1))
     (_, _, _, _, s_end, disc_end, P, dvm, xmax, c, fc, _) = _run(
         model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc, events,
-        monodromy, P0, dvm0, True, 0, graded)
+        monodromy, P0, dvm0, True, 0, graded, 0, warn)
     if monodromy:
         M = P[:, :2 * N].copy()
         dS_dv = P[:, 2 * N:].copy() if in_contact else None
@@ -287,4 +291,4 @@ def flow(model, excitation, state0, t0, duration, *, monodromy=False, disc0=None
         M = dS_dv = dv_dS = dv_dv = None
     return Flow(state=s_end, disc=disc_end, xmax=xmax, n_impacts=int(c[4]), monodromy=M,
                 dstate_dvminus0=dS_dv, dvminus_dstate0=dv_dS, dvminus_dvminus0=dv_dv,
-                n_steps=int(c[1]), n_rhs=int(c[3]))
+                n_steps=int(c[1]), n_rhs=int(c[3]), min_steps_per_contact=int(c[5]))

@@ -281,6 +281,21 @@ class System:
     def has_events(self) -> bool:
         return any(_k.has_event(t) for t in self._arrays[4])
 
+    @property
+    def contact_elements(self) -> np.ndarray:
+        """Indices of the elements with contact events (the stops)."""
+        return np.flatnonzero([_k.has_event(t) for t in self._arrays[4]])
+
+    def penetration(self, state, y=0.0, yd=0.0):
+        """(delta, delta') of every element (m, m/s) at ``state`` [x, v] (shape (..., 2N)) and
+        excitation (y, y'); positive delta is inside the stop."""
+        state = np.asarray(state, dtype=float)
+        N = self.n_dof
+        ew, ewy, egap = self._arrays[5], self._arrays[6], self._arrays[7]
+        d = state[..., :N] @ ew.T + np.multiply.outer(np.asarray(y, dtype=float), ewy) - egap
+        dd = state[..., N:] @ ew.T + np.multiply.outer(np.asarray(yd, dtype=float), ewy)
+        return d, dd
+
     def parameters(self) -> dict:
         d = {"model": self.name, "n_dof": self.n_dof, "excitation_kind": self.excitation_kind}
         for i, el in enumerate(self.elements):
@@ -298,6 +313,8 @@ def _model_protocol(cls):
     cls.kernels = lambda self: self.system.kernels()
     cls.natural_frequencies = lambda self: self.system.natural_frequencies()
     cls.has_events = lambda self: self.system.has_events()
+    cls.contact_elements = property(lambda self: self.system.contact_elements)
+    cls.penetration = lambda self, state, y=0.0, yd=0.0: self.system.penetration(state, y, yd)
     return cls
 
 
