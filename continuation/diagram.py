@@ -202,6 +202,7 @@ def _both_ways(tracer, prob, u, p, stop=None):
     if reason == "closed":
         return fwd, loc_f
     bwd, loc_b, _ = tracer.trace(prob, u, p, direction=-1, stop=stop)
+
     nb = len(bwd)
     pts = bwd[::-1][:-1] + fwd
     for L in loc_b:
@@ -257,19 +258,34 @@ def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=
     return found
 
 
-def _covered(branches, order, f, xmax, rel=2e-3):
-    for b in branches:
-        if b.order != order:
+def _on_branch(branches, order, f, xmax, state0, rel=2e-3, state_rel=0.05):
+    """Index of a traced branch of this order through the solution (f Hz, xmax m, state0: its
+    states at t = k / f, k = 0..order-1 (the same orbit seen from each excitation period), or a
+    callable giving them), or None. The point must lie within ``rel`` (relative, plus a
+    twentieth of the local segment length) of the branch's (f, xmax) polyline, and its state at
+    t = 0 within ``state_rel`` of the state interpolated there (in units of the orbit's size)."""
+    for bi, b in enumerate(branches):
+        if b.order != order or len(b.frequency) < 2:
             continue
-        fr, xm = b.frequency, b.xmax
-        for i in range(len(fr) - 1):
-            lo, hi = sorted((fr[i], fr[i + 1]))
-            if lo <= f <= hi:
-                x = xm[i] + (xm[i + 1] - xm[i]) * ((f - fr[i]) / (fr[i + 1] - fr[i])
-                                                    if fr[i + 1] != fr[i] else 0.0)
-                if abs(x - xmax) <= rel * xmax:
-                    return True
-    return False
+        F = b.frequency / f - 1.0
+        X = b.xmax / xmax - 1.0
+        dF, dX = np.diff(F), np.diff(X)
+        L2 = dF ** 2 + dX ** 2
+        lam = np.clip(-(F[:-1] * dF + X[:-1] * dX) / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
+        dist = np.hypot(F[:-1] + lam * dF, X[:-1] + lam * dX)
+        ok = np.nonzero(dist <= rel + 0.05 * np.sqrt(L2))[0]
+        shifts = None
+        for i in ok:
+            s_b = b.state0[i] + lam[i] * (b.state0[i + 1] - b.state0[i])
+            if shifts is None:
+                shifts = state0() if callable(state0) else state0
+                shifts = np.atleast_2d(shifts)
+            N = shifts.shape[1] // 2
+            w = 2 * np.pi * f / order
+            sc = np.r_[np.full(N, xmax), np.full(N, xmax * w)]
+            if np.min(np.max(np.abs(shifts - s_b) / sc, axis=1)) <= state_rel:
+                return bi
+    return None
 
 
 def _dominant_harmonic(prob, u, p):
@@ -322,8 +338,9 @@ def _halves_distance(pt):
     return float(np.max(np.abs(fl.state - U[0]) / prob.scale_u[:prob.N2]))
 
 
-def _trace_switched(tracer, pt, order):
+def _trace_switched(tracer, pt, order, branches=()):
     P2, u2, p, t0 = _switch(tracer, pt, order)
+    overlap = _overlap_stop(branches, 2 * order, skip=2)
     d0 = [None, 0.0]
 
     def stop(q):
@@ -347,10 +364,56 @@ def _trace_switched(tracer, pt, order):
         return None
     u1, p1 = z1[:-1] * w, z1[-1] * wp
     # orient along the direction away from the PD point
-    pts, loc, reason = tracer.trace(P2, u1, p1, stop=stop, t0=(z1 - z0) / np.linalg.norm(z1 - z0))
+    pts, loc, reason = tracer.trace(P2, u1, p1, stop=_either(stop, overlap),
+                                    t0=(z1 - z0) / np.linalg.norm(z1 - z0))
     if _halves_distance(pts[0]) < 1e-6:
         return None
     return pts, loc
+
+
+def _overlap_stop(branches, order, skip=0):
+    """A stop rule: the point has run onto an already traced branch of the same order (checked
+    from the ``skip``-th point on)."""
+    count = [0]
+
+    def stop(pt):
+        count[0] += 1
+        if count[0] <= skip:
+            return False
+        m_, A_, f = pt.problem.setup(pt.p)
+        return _on_branch(branches, order, f, pt.xmax,
+                          lambda: _shifted_states(pt.problem, pt.u, pt.p)) is not None
+    return stop
+
+
+def _shifted_states(prob, u, p):
+    """States at t = k / f, k = 0..order-1, of the orbit u of prob (rows)."""
+    s0, d0 = prob.state_at_zero(u, p)
+    out = [s0]
+    if prob.order > 1:
+        model, A, f = prob.setup(p)
+        it = prob.integrator
+        spp = prob.steps_per_period
+        fl = None
+        s, d = s0, d0
+        for k in range(1, prob.order):
+            fl = nlbeam.flow(model, nlbeam.Harmonic(A, f), s, (k - 1) / f, 1 / f, disc0=d,
+                             method=it.method, dt=1 / (f * spp) if spp else None,
+                             steps_per_contact=it.steps_per_contact, rtol=it.rtol, atol=it.atol,
+                             warn=False)
+            s, d = fl.state, fl.disc
+            out.append(s)
+    return np.array(out)
+
+
+def _either(*rules):
+    return lambda pt: any(r(pt) for r in rules)
+
+
+def _same_point(a, b, rel=1e-6):
+    return (a.kind == b.kind and a.order == b.order
+            and abs(a.value - b.value) <= rel * max(abs(a.value), 1e-300)
+            and abs(a.xmax - b.xmax) <= 1e-4 * max(abs(a.xmax), 1e-300))
 
 
 def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer, integrator,
@@ -369,9 +432,12 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
         branches.append(_to_branch(points, order, parameter, origin))
         for L in located:
             m_, A_, f_ = L.point.problem.setup(L.point.p)
-            bifs.append(Bifurcation(L.kind, float(f_), float(L.point.p), float(L.point.xmax),
-                                    order, bi, float(L.tolerance), L.point.multipliers,
-                                    L.point.problem.state_at_zero(L.point.u, L.point.p)[0]))
+            bf = Bifurcation(L.kind, float(f_), float(L.point.p), float(L.point.xmax),
+                             order, bi, float(L.tolerance), L.point.multipliers,
+                             L.point.problem.state_at_zero(L.point.u, L.point.p)[0])
+            if any(_same_point(bf, other) for other in bifs):
+                continue  # where a branch ran onto another one, its end point is already listed
+            bifs.append(bf)
             if L.kind == "period-doubling":
                 pd_points.append((L.point, order, bi))
 
@@ -395,9 +461,10 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
             if _minimal_order(sol_prob, u, p) != order:
                 continue
             ev = sol_prob.evaluate(u, p, jac=False, jac_p=False)
-            if _covered(branches, order, f, ev.xmax):
+            if _on_branch(branches, order, f, ev.xmax,
+                          lambda: _shifted_states(sol_prob, u, p)) is not None:
                 continue
-            pts, loc = _both_ways(tracer, sol_prob, u, p)
+            pts, loc = _both_ways(tracer, sol_prob, u, p, stop=_overlap_stop(branches, order))
             add(pts, loc, order, "brute-force" if len(starts) == 0 or (f, n, s0) not in starts
                 else "start")
         # branch switching at period doublings of this order
@@ -406,7 +473,7 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                 if o != order or k in handled:
                     continue
                 handled.add(k)
-                res = _trace_switched(tracer, pt, order)
+                res = _trace_switched(tracer, pt, order, branches)
                 if res is None:
                     continue
                 pts, loc = res
@@ -447,7 +514,7 @@ def _superharmonics(branches, model, integrator):
 
 def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30, segments=1,
                        integrator=None, switch=True, brute_force_grid=True, starts=(),
-                       ds=0.02, ds_max=0.08, max_angle=0.15, max_points=3000, tol=1e-10,
+                       ds=0.02, ds_max=0.5, max_angle=0.2, max_points=1000, tol=1e-10,
                        bif_tol=1e-10, **integrator_kw):
     """The |x|max-versus-frequency diagram at excitation amplitude (m, or N for force).
 
@@ -483,7 +550,7 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
 
 
 def continue_parameter(solution, parameter, p_range, *, model, segments=1, integrator=None,
-                       ds=0.02, ds_max=0.08, max_angle=0.15, max_points=3000, tol=1e-10,
+                       ds=0.02, ds_max=0.5, max_angle=0.2, max_points=1000, tol=1e-10,
                        bif_tol=1e-10, **integrator_kw):
     """Follow a PeriodicSolution of ``model`` in ``parameter`` ('amplitude', 'frequency', or a
     model field such as 'e' or 'K_hertz') over p_range, both ways. Returns a FrequencyResponse

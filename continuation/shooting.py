@@ -151,7 +151,7 @@ class ShootingProblem:
         try:
             return nlbeam.flow(model, ex, s, t0, dur, monodromy=mono, method=it.method, dt=dt,
                                steps_per_contact=it.steps_per_contact, rtol=it.rtol,
-                               atol=it.atol, max_steps=int(50 * dur / dt) + 20000)
+                               atol=it.atol, max_steps=int(50 * dur / dt) + 20000, warn=False)
         except nlbeam.IntegrationError as exc:
             # an iterate far from any orbit (e.g. a huge penetration): a failed Newton step
             raise ConvergenceError(f"shooting: integration failed ({exc}); try a smaller step "
@@ -167,10 +167,12 @@ class ShootingProblem:
         ends = np.empty_like(U)
         Ms = []
         xm = 0.0
+        n_imp = 0
         N = model.n_dof
         for j, t0, dur, dt in self._segments(f):
             fl = self._flow(model, ex, U[j], t0, dur, dt, mono)
             ends[j] = fl.state
+            n_imp += fl.n_impacts
             xm = max(xm, float(fl.xmax[self.out]))
             if mono:
                 M = fl.monodromy
@@ -182,6 +184,7 @@ class ShootingProblem:
                     D[:, N:] = arr[5]
                     M = M + fl.dstate_dvminus0 @ D
                 Ms.append(M)
+        self.last_impacts = n_imp
         return ends, Ms, xm
 
     def evaluate(self, u, p, jac=True, jac_p=True):
@@ -190,6 +193,7 @@ class ShootingProblem:
         steers Newton and the predictor; the solution does not depend on it)."""
         U = np.asarray(u, dtype=float).reshape(self.n_seg, self.N2)
         ends, Ms, xm = self._map(U, p, jac)
+        n_imp = self.last_impacts
         R = (ends - np.roll(U, -1, axis=0)).ravel()
         Ju = None
         if jac:
@@ -204,7 +208,7 @@ class ShootingProblem:
             h = 1e-7 * self.scale_p
             e_hi = self._map(U, p + h, False)[0]
             Jp = ((e_hi - ends) / h).ravel()
-        return Evaluation(R, Ju, Jp, Ms, xm)
+        return Evaluation(R, Ju, Jp, Ms, xm, n_imp)
 
     # --- derived quantities -----------------------------------------------------------------
     def monodromy(self, Ms):
@@ -307,6 +311,19 @@ class ShootingProblem:
         new.sel_clearance = c[idx] if np.isfinite(c[0]) else None
         return new, unew
 
+    def settle(self, u, p, p_new, efolds=8.0):
+        """Boundary states at parameter p_new of the attractor reached by integrating from the
+        orbit u (at p) for about ``efolds`` decay times (frequency continuation only)."""
+        if self.parameter != "frequency":
+            raise ConvergenceError("settle: only for frequency continuation")
+        model, A, f = self.setup(p)
+        s0, _ = self.state_at_zero(u, p)
+        s = steady_state(model, A, p_new, x0=s0, efolds=efolds, min_periods=10,
+                         integrator=self.integrator)
+        tmp = ShootingProblem(self.base_model, A, p_new, self.order, [0.0], self.integrator,
+                              steps_per_period=self.steps_per_period)
+        return self.transfer(tmp, s, p_new)
+
     def needs_rephase(self, u, p):
         if self.sel_clearance is None:
             return False
@@ -375,6 +392,7 @@ class Evaluation:
     Jp: np.ndarray | None
     Ms: list
     xmax: float
+    n_impacts: int = 0  # contact onsets over the period
 
 
 @dataclass
