@@ -1,15 +1,19 @@
 """continuation: periodic solutions, their stability and frequency-response diagrams.
 
 Front door: ``periodic_solution`` (shooting), ``frequency_response`` and ``continue_parameter``
-(pseudo-arclength path following with bifurcation detection), ``load``. Plotting lives in
+(pseudo-arclength path following with bifurcation detection), ``refine_bifurcations``
+(folds and period doublings to 7-9 digits by an extended system, step refinement and Richardson
+extrapolation), ``load``. Plotting lives in
 ``continuation.plot`` (imports matplotlib); HDF5 I/O imports h5py only when called.
 Units: Hz, m (N for force excitation), s.
 """
 from ._newton import ConvergenceError
 from .diagram import (Bifurcation, Branch, FrequencyResponse, Superharmonic,
                       continue_parameter, frequency_response, load)
+from .refine import Refined, refine, refine_bifurcations
 from .shooting import Integrator, PeriodicSolution, periodic_solution
 
 __all__ = ["periodic_solution", "frequency_response", "continue_parameter", "load",
            "PeriodicSolution", "FrequencyResponse", "Branch", "Bifurcation", "Superharmonic",
-           "Integrator", "ConvergenceError"]
+           "Integrator", "ConvergenceError", "refine", "refine_bifurcations",
+           "Refined"]

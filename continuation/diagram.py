@@ -41,9 +41,14 @@ class Branch:
 
 @dataclass
 class Bifurcation:
-    """kind: 'fold', 'period-doubling' or 'neimark-sacker'; frequency (Hz) and value of the
-    continued parameter at the point, located to ``tolerance`` (width of the final bracket in
-    the parameter); xmax (m); order of the branch it lies on; branch index; multipliers."""
+    """kind: 'fold', 'period-doubling', 'neimark-sacker' or 'grazing' (the number of impacts per
+    period changes: an orbit touches a stop with zero velocity; the flow map has a square-root
+    singularity there and the branch is continued past it by a jump, see Tracer.jump);
+    frequency (Hz) and value of the continued parameter at the point, located to ``tolerance``
+    (width of the final bracket in the parameter; it does not include the integrator's error,
+    see docs/continuation_report.md for the convergence under step refinement); xmax (m);
+    order of the branch it lies on; branch index; multipliers (for a grazing point: those of
+    the branch point on the far side of the bracket)."""
 
     kind: str
     frequency: float
@@ -54,16 +59,22 @@ class Bifurcation:
     tolerance: float
     multipliers: np.ndarray
     state0: np.ndarray | None = None
+    integrator_error: float = float("nan")  # estimate, set by refine_bifurcations
+    refined: object = None  # a continuation.refine.Refined, set by refine_bifurcations
 
 
 @dataclass
 class Superharmonic:
-    """A peak of the harmonic branch dominated by the harmonic ``harmonic`` of f."""
+    """A superharmonic resonance: a peak of the harmonic branch at frequency (Hz, +- tolerance)
+    where ``harmonic`` times f lies near the main resonance; ratio: amplitude of that harmonic
+    over the first in the response relative to the base."""
 
     frequency: float
     xmax: float
     harmonic: int
     branch: int
+    ratio: float = float("nan")
+    tolerance: float = float("nan")
 
 
 @dataclass
@@ -114,7 +125,8 @@ class FrequencyResponse:
                 gf = h.create_group("bifurcations")
                 bif = self.bifurcations
                 gf.create_dataset("kind", data=np.array([b.kind for b in bif], dtype="S16"))
-                for name in ("frequency", "value", "xmax", "order", "branch", "tolerance"):
+                for name in ("frequency", "value", "xmax", "order", "branch", "tolerance",
+                             "integrator_error"):
                     gf.create_dataset(name, data=np.array([getattr(b, name) for b in bif],
                                                           dtype=float))
                 n2 = max([len(b.multipliers) for b in bif], default=0)
@@ -129,7 +141,7 @@ class FrequencyResponse:
                         st[i] = b.state0
                 gf.create_dataset("state0", data=st)
                 gs = h.create_group("superharmonics")
-                for name in ("frequency", "xmax", "harmonic", "branch"):
+                for name in ("frequency", "xmax", "harmonic", "branch", "ratio", "tolerance"):
                     gs.create_dataset(name, data=np.array([getattr(s, name) for s in
                                                            self.superharmonics], dtype=float))
             os.replace(tmp, path)
@@ -168,12 +180,15 @@ def load(path):
                 value=float(gf["value"][i]), xmax=float(gf["xmax"][i]),
                 order=int(gf["order"][i]), branch=int(gf["branch"][i]),
                 tolerance=float(gf["tolerance"][i]), multipliers=gf["multipliers"][i],
+                integrator_error=float(gf["integrator_error"][i]) if "integrator_error" in gf
+                else float("nan"),
                 state0=gf["state0"][i]))
         gs = h["superharmonics"]
         for i in range(len(gs["frequency"])):
             frc.superharmonics.append(Superharmonic(
                 frequency=float(gs["frequency"][i]), xmax=float(gs["xmax"][i]),
-                harmonic=int(gs["harmonic"][i]), branch=int(gs["branch"][i])))
+                harmonic=int(gs["harmonic"][i]), branch=int(gs["branch"][i]),
+                **{n: float(gs[n][i]) for n in ("ratio", "tolerance") if n in gs}))
     return frc
 
 
@@ -224,7 +239,8 @@ def _minimal_order(prob, u, p, tol=1e-6):
         fl = nlbeam.flow(model, nlbeam.Harmonic(A, f), U[0], prob.boundaries[0] / f, k / f,
                          method=prob.integrator.method, rtol=prob.integrator.rtol,
                          atol=prob.integrator.atol,
-                         dt=1.0 / (f * prob.steps_per_period) if prob.steps_per_period else None)
+                         dt=1.0 / (f * prob.steps_per_period) if prob.steps_per_period else None,
+                     warn=False)
         if np.max(np.abs(fl.state - U[0]) / w) < tol:
             return k
     return n
@@ -245,7 +261,7 @@ def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=
             tr = nlbeam.integrate(model, nlbeam.Harmonic(amplitude, f), n_tot / f,
                                   method=integrator.method, dt=1.0 / (f * spp), x0=x,
                                   store_every=spp, steps_per_contact=integrator.steps_per_contact,
-                                  rtol=integrator.rtol, atol=integrator.atol)
+                                  rtol=integrator.rtol, atol=integrator.atol, warn=False)
             S = np.hstack([tr.x, tr.v])[: n_tot + 1]
             x = tr.state_end
             tail = S[-(3 * nmax + 1):]
@@ -334,7 +350,8 @@ def _halves_distance(pt):
     fl = nlbeam.flow(model, nlbeam.Harmonic(A, f), U[0], prob.boundaries[0] / f, half / f,
                      method=prob.integrator.method, rtol=prob.integrator.rtol,
                      atol=prob.integrator.atol,
-                     dt=1.0 / (f * prob.steps_per_period) if prob.steps_per_period else None)
+                     dt=1.0 / (f * prob.steps_per_period) if prob.steps_per_period else None,
+                     warn=False)
     return float(np.max(np.abs(fl.state - U[0]) / prob.scale_u[:prob.N2]))
 
 
@@ -495,20 +512,59 @@ def _polish(prob, u0, p, tol):
     return prob, u, p
 
 
-def _superharmonics(branches, model, integrator):
+def _harmonic_amplitudes(model, amplitude, f, state0, n_samples=512):
+    """Amplitudes of the harmonics k = 0..n/2 of f of the response relative to the excitation
+    (x - y of the output DOF for base excitation, x for force excitation) over one period."""
+    ex = nlbeam.Harmonic(amplitude, f)
+    tr = nlbeam.integrate(model, ex, 1 / f, x0=state0, dt=1 / (f * n_samples), warn=False)
+    sig = tr.x[:-1, model.output_dof]
+    if model.excitation_kind == "base":
+        sig = sig - tr.y[:-1]
+    return 2 * np.abs(np.fft.rfft(sig - sig.mean())) / len(sig)
+
+
+def _vertex(f, x):
+    """Peak (f, x) of the parabola x(s) through three branch points, s the arclength in the
+    plane (f / f_mid, x / x_mid); f(s) interpolated by the parabola through the same points."""
+    F, X = f / f[1], x / x[1]
+    s = np.r_[0.0, np.cumsum(np.hypot(np.diff(F), np.diff(X)))]
+    cx = np.polyfit(s, x, 2)
+    if cx[0] >= 0:
+        return float(f[1]), float(x[1])
+    s_star = float(np.clip(-cx[1] / (2 * cx[0]), s[0], s[-1]))
+    return float(np.polyval(np.polyfit(s, f, 2), s_star)), float(np.polyval(cx, s_star))
+
+
+def _superharmonics(branches, model, integrator, orders=(2, 3), window=0.15, min_ratio=0.15):
+    """Superharmonic resonances of order k on the harmonic (order-1) branches: the highest local
+    maximum of xmax along a branch with k f within ``window`` (relative) of the main resonance
+    (the frequency of the largest xmax), where the k-th harmonic of the relative response is at
+    least ``min_ratio`` of the first. The frequency is that of the branch point (tolerance: half
+    the distance to its neighbours) of the vertex of a parabola through the peak point and its
+    neighbours."""
     out = []
-    for bi, b in enumerate(branches):
-        if b.order != 1 or len(b.xmax) < 3:
-            continue
+    ones = [(bi, b) for bi, b in enumerate(branches) if b.order == 1 and len(b.xmax) >= 3]
+    if not ones:
+        return out
+    bi_res, b_res = max(ones, key=lambda ib: ib[1].xmax.max())
+    f_res = float(b_res.frequency[np.argmax(b_res.xmax)])
+    peaks = []
+    for bi, b in ones:
         x = b.xmax
         for i in range(1, len(x) - 1):
             if x[i] > x[i - 1] and x[i] >= x[i + 1]:
-                prob = ShootingProblem(model, b.amplitude[i], b.frequency[i], 1,
-                                       b.boundaries[i], integrator)
-                prob.scale_u = prob.make_scale(b.states[i].ravel(), prob.value())
-                k = _dominant_harmonic(prob, b.states[i].ravel(), prob.value())
-                if k >= 2:
-                    out.append(Superharmonic(float(b.frequency[i]), float(x[i]), k, bi))
+                peaks.append((bi, i, float(b.frequency[i]), float(x[i])))
+    for k in orders:
+        cand = [q for q in peaks if abs(k * q[2] / f_res - 1) < window]
+        for bi, i, f, xm in sorted(cand, key=lambda q: -q[3]):
+            b = branches[bi]
+            X = _harmonic_amplitudes(model, b.amplitude[i], f, b.state0[i])
+            ratio = float(X[k] / X[1])
+            if ratio >= min_ratio:
+                fp, xp = _vertex(b.frequency[i - 1:i + 2], b.xmax[i - 1:i + 2])
+                tol = 0.5 * float(max(abs(b.frequency[i + 1] - f), abs(f - b.frequency[i - 1])))
+                out.append(Superharmonic(fp, xp, k, bi, ratio, tol))
+                break
     return out
 
 

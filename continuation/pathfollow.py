@@ -73,7 +73,7 @@ class Tracer:
     def __init__(self, *, p_min=-np.inf, p_max=np.inf, ds=0.02, ds_min=1e-7, ds_max=0.1,
                  max_angle=0.15, max_points=3000, tol=1e-10, bif_tol=1e-10, detect=True,
                  max_iter=8, ds_jump=1e-4, jump_steps=(1e-5, 1e-4, 1e-3), jump_max_distance=0.05,
-                 grazing_iter=12):
+                 grazing_iter=8):
         self.p_min, self.p_max = p_min, p_max
         self.ds0, self.ds_min, self.ds_max = ds, ds_min, ds_max
         self.max_angle = max_angle

@@ -267,7 +267,7 @@ class ShootingProblem:
             dt = T / (n_samples or 400 * self.order)
         return nlbeam.integrate(model, ex, t0 + T, method=it.method, dt=dt, x0=U[0], t0=t0,
                                 steps_per_contact=it.steps_per_contact, rtol=it.rtol,
-                                atol=it.atol)
+                                atol=it.atol, warn=False)
 
     def rephased(self, u, p, n_seg=None, steps_per_period=None):
         """A problem with boundaries moved into free flight (as far from the stops as possible,
@@ -360,7 +360,7 @@ class ShootingProblem:
                 if old.steps_per_period else dphi / f
             out[i] = nlbeam.flow(model, ex, U[j], b[j] / f, dphi / f, method=it.method, dt=dt,
                                  steps_per_contact=it.steps_per_contact, rtol=it.rtol,
-                                 atol=it.atol).state
+                                 atol=it.atol, warn=False).state
         return out.ravel()
 
     def state_at_zero(self, u, p):
@@ -380,7 +380,7 @@ class ShootingProblem:
                     if self.steps_per_period else dphi / f
                 fl = nlbeam.flow(model, nlbeam.Harmonic(A, f), U[j], b[j] / f, dphi / f,
                                  method=it.method, dt=dt, steps_per_contact=it.steps_per_contact,
-                                 rtol=it.rtol, atol=it.atol)
+                                 rtol=it.rtol, atol=it.atol, warn=False)
                 return fl.state, fl.disc
         return U[0].copy(), None
 
@@ -444,7 +444,7 @@ def steady_state(model, amplitude, frequency, *, x0=None, efolds=8.0, min_period
     tr = nlbeam.integrate(model, nlbeam.Harmonic(amplitude, frequency), n / frequency,
                           method=integrator.method, dt=dt, x0=x0, store_every=0,
                           steps_per_contact=integrator.steps_per_contact,
-                          rtol=integrator.rtol, atol=integrator.atol)
+                          rtol=integrator.rtol, atol=integrator.atol, warn=False)
     return tr.state_end
 
 
