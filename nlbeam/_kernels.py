@@ -482,7 +482,7 @@ def step_extrema(s0, f0, s1, f1, h, N, xmax):
 
 # --- event location on the step map ---------------------------------------------------------------
 @njit(cache=True)
-def delta_after(meth, t, tau, s, P, dvm, disc, e, sign, sysa, xc, xp, xtab, f0,
+def delta_after(meth, t, tau, s, P, dvm, disc, e, sign, level, sysa, xc, xp, xtab, f0,
                 s_out, P_out, KS, KP, ytmp, Ptmp, fel, err_w):
     """sign * delta_e after one step of length tau from (t, s); status in the second slot."""
     st = rk_step(meth, t, tau, s, P, dvm, disc, False, sysa, xc, xp, xtab, f0,
@@ -491,11 +491,11 @@ def delta_after(meth, t, tau, s, P, dvm, disc, e, sign, sysa, xc, xp, xtab, f0,
         return 0.0, st
     y, yd, ydd, st = excite(t + tau, xc, xp, xtab)
     d, dd = kinematics(e, s_out, y, yd, sysa)
-    return sign * d, st
+    return sign * (d - level), st
 
 
 @njit(cache=True)
-def locate(meth, t, lo, hi, phi_lo, phi_hi, s, P, dvm, disc, e, sign, sysa, xc, xp, xtab, f0,
+def locate(meth, t, lo, hi, phi_lo, phi_hi, s, P, dvm, disc, e, sign, level, sysa, xc, xp, xtab, f0,
            s_out, P_out, KS, KP, ytmp, Ptmp, fel, err_w):
     """Root of phi(tau) = sign*delta_e(step(s, tau)) in [lo, hi], phi_lo <= 0 < phi_hi, by the
     Illinois method. Returns (tau_hi, status): the bracket end on the far side (phi >= 0), at
@@ -510,7 +510,7 @@ def locate(meth, t, lo, hi, phi_lo, phi_hi, s, P, dvm, disc, e, sign, sysa, xc, 
         tau = (lo * phi_hi - hi * phi_lo) / (phi_hi - phi_lo)
         if not (tau > lo and tau < hi):
             tau = 0.5 * (lo + hi)
-        ph, st = delta_after(meth, t, tau, s, P, dvm, disc, e, sign, sysa, xc, xp, xtab, f0,
+        ph, st = delta_after(meth, t, tau, s, P, dvm, disc, e, sign, level, sysa, xc, xp, xtab, f0,
                              s_out, P_out, KS, KP, ytmp, Ptmp, fel, err_w)
         if st != 0:
             return hi, st
@@ -533,9 +533,11 @@ def locate(meth, t, lo, hi, phi_lo, phi_hi, s, P, dvm, disc, e, sign, sysa, xc, 
 
 # --- the integrator ---------------------------------------------------------------------------------
 @njit(cache=True)
-def contact_step(e, v0, sysa, spc):
-    """Time step inside a contact of element e that starts at penetration rate v0 (m/s):
-    the estimated contact duration divided by spc."""
+def contact_step(e, v0, a0, sysa, spc):
+    """Time step inside a contact of element e that starts at penetration rate v0 (m/s) and
+    free-flight penetration acceleration a0 (m/s^2): the estimated contact duration divided by
+    spc. The duration is that of a free mass on the stop, or of a grazing touch, 2 v0 / |a0|,
+    when a0 < 0 makes that shorter."""
     etype = sysa[4]
     ew = sysa[5]
     epar = sysa[8]
@@ -551,6 +553,10 @@ def contact_step(e, v0, sysa, spc):
         v = max(v0, 1e-12)
         dmax = (1.25 * meff * v * v / K) ** 0.4
         tc = _T_C_HERTZ * dmax / v
+    if a0 < 0.0:
+        tg = 2.0 * max(v0, 1e-12) / (-a0)
+        if tg < tc:
+            tc = tg
     return tc / spc
 
 
@@ -567,6 +573,41 @@ def _store(n_stored, t, s, disc, xc, xp, xtab, sysa, out_t, out_s, out_d, out_f)
         f, a1, a2, a3 = element_force(etype[e], sysa[8][e], d, dd, disc[e, 1], disc[e, 0])
         out_f[n_stored, e] = f
     return n_stored + 1
+
+
+@njit(cache=True)
+def delta_extremum(e, sign, t, h, s, s_new, f0, f1, sysa, xc, xp, xtab):
+    """(theta, delta) at the extremum of delta_e within a step, on the quintic dense output;
+    sign = +1 for a maximum, -1 for a minimum."""
+    N = s.shape[0] // 2
+    ew = sysa[5]
+    wx0 = 0.0
+    wv0 = 0.0
+    wa0 = 0.0
+    wx1 = 0.0
+    wv1 = 0.0
+    wa1 = 0.0
+    for j in range(N):
+        wx0 += ew[e, j] * s[j]
+        wv0 += ew[e, j] * s[N + j]
+        wa0 += ew[e, j] * f0[N + j]
+        wx1 += ew[e, j] * s_new[j]
+        wv1 += ew[e, j] * s_new[N + j]
+        wa1 += ew[e, j] * f1[N + j]
+    lo_b = 0.0
+    hi_b = 1.0
+    for _ in range(50):
+        th = 0.5 * (lo_b + hi_b)
+        xw, xwd = hermite5(wx0, wv0, wa0, wx1, wv1, wa1, h, th)
+        ym, ydm, yddm, st2 = excite(t + th * h, xc, xp, xtab)
+        if sign * (xwd + sysa[6][e] * ydm) > 0.0:
+            lo_b = th
+        else:
+            hi_b = th
+    th = 0.5 * (lo_b + hi_b)
+    xw, xwd = hermite5(wx0, wv0, wa0, wx1, wv1, wa1, h, th)
+    ym, ydm, yddm, st2 = excite(t + th * h, xc, xp, xtab)
+    return th, xw + sysa[6][e] * ym - sysa[7][e]
 
 
 @njit(cache=True)
@@ -591,36 +632,11 @@ def _crossing(meth, t, h, s, s_new, f0, f1, P, dvm, disc, e, sysa, xc, xp, xtab,
     elif sign * dd0 > 0.0 and sign * dd1 < 0.0:
         # the boundary may be touched between the step ends: find the extremum of delta on the
         # quintic dense output, then check it on the step map
-        wx0 = 0.0
-        wv0 = 0.0
-        wa0 = 0.0
-        wx1 = 0.0
-        wv1 = 0.0
-        wa1 = 0.0
-        for j in range(N):
-            wx0 += ew[e, j] * s[j]
-            wv0 += ew[e, j] * s[N + j]
-            wa0 += ew[e, j] * f0[N + j]
-            wx1 += ew[e, j] * s_new[j]
-            wv1 += ew[e, j] * s_new[N + j]
-            wa1 += ew[e, j] * f1[N + j]
-        lo_b = 0.0
-        hi_b = 1.0
-        for _ in range(50):
-            th = 0.5 * (lo_b + hi_b)
-            xw, xwd = hermite5(wx0, wv0, wa0, wx1, wv1, wa1, h, th)
-            ym, ydm, yddm, st2 = excite(t + th * h, xc, xp, xtab)
-            if sign * (xwd + sysa[6][e] * ydm) > 0.0:
-                lo_b = th
-            else:
-                hi_b = th
-        th = 0.5 * (lo_b + hi_b)
-        xw, xwd = hermite5(wx0, wv0, wa0, wx1, wv1, wa1, h, th)
-        ym, ydm, yddm, st2 = excite(t + th * h, xc, xp, xtab)
-        dmh = sign * (xw + sysa[6][e] * ym - sysa[7][e])
+        th, dmh = delta_extremum(e, sign, t, h, s, s_new, f0, f1, sysa, xc, xp, xtab)
+        dmh = sign * dmh
         if dmh > -1e-3 * max(abs(d0), abs(d1)):
             tm = th * h
-            dm, st = delta_after(meth, t, tm, s, P, dvm, disc, e, sign, sysa, xc, xp,
+            dm, st = delta_after(meth, t, tm, s, P, dvm, disc, e, sign, 0.0, sysa, xc, xp,
                                  xtab, f0, s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w)
             if dm > 0.0:
                 hi = tm
@@ -629,7 +645,7 @@ def _crossing(meth, t, h, s, s_new, f0, f1, P, dvm, disc, e, sysa, xc, xp, xtab,
         return -1.0, 0
     if phi0 > 0.0:
         phi0 = 0.0
-    return locate(meth, t, 0.0, hi, phi0, phihi, s, P, dvm, disc, e, sign, sysa, xc, xp, xtab,
+    return locate(meth, t, 0.0, hi, phi0, phihi, s, P, dvm, disc, e, sign, 0.0, sysa, xc, xp, xtab,
                   f0, s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w)
 
 
@@ -640,20 +656,23 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                      s_end, disc_end, P_end, dvm_end, xmax, counters, fcounters):
     """Integrate from t0 to t_end.
 
-    Fixed-step methods (RK2, RK4) step on the grid t0 + k dt, with steps of (estimated contact
-    duration) / spc while an element is in contact, land on every contact boundary (root of
-    the step map, to a few ulps of t), then step on to the next grid point. With ``graded``, the
-    first quarter of a contact is stepped uniformly in sigma = sqrt(t - t_onset) and the last
-    part uniformly in u = sqrt(delta), which removes the delta^1.5 singularity of the contact
-    force at both boundaries. DP5 controls its error with (rtol, atol) and writes samples onto
-    the grid by quintic Hermite dense output. Samples: every store_every-th grid point, t0 and
-    t_end included.
+    Fixed-step methods (RK2, RK4) step on the grid t0 + k dt in free flight; inside a contact
+    they take steps of (estimated contact duration) / spc, starting from the onset and ignoring
+    the grid (grid samples inside a contact come from the quintic Hermite dense output), so that
+    the step sequence is a smooth function of the initial state. Every contact boundary is a
+    root of the step map, landed on to a few ulps of t. With ``graded`` (one element in contact)
+    the first quarter of a contact is stepped uniformly in sigma = sqrt(t - t_onset), and from
+    the point where delta has fallen back to KAPPA * (its maximum) uniformly in u = sqrt(delta)
+    down to delta = 0 (then polished to round-off): this removes the delta^1.5 singularity of
+    the contact force at both boundaries. DP5 controls its error with (rtol, atol); grid samples
+    come from dense output. Samples: every store_every-th grid point, t0 and t_end included.
 
     counters: [n_stored, n_steps, n_rejected, n_rhs, n_impacts, min_steps_per_contact,
                n_contacts, n_events]
     fcounters: [t_reached, max |delta| at a landed event]
     ev_log (cap, 4): [t, element, 1 onset / 0 end, delta' at the boundary] of the first cap events.
     """
+    KAPPA = 0.25
     etype = sysa[4]
     N = sysa[0].shape[0]
     n = 2 * N
@@ -680,9 +699,18 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
     dummyP = np.zeros((n, m))
     steps_in_contact = np.zeros(ne, dtype=np.int64)
     dtc = np.full(ne, np.inf)
+    d_sw = np.full(ne, -1.0)     # delta at which the graded exit phase starts (-1: unknown)
+    y, yd, ydd, st = excite(t0, xc, xp, xtab)
     for e in range(ne):
         if disc[e, 0] != 0.0:
-            dtc[e] = contact_step(e, abs(disc[e, 1]), sysa, spc)
+            # a record that starts inside a contact: the impact velocity with the same energy
+            d, dd = kinematics(e, s, y, yd, sysa)
+            winv = 0.0
+            for j in range(N):
+                winv += sysa[5][e, j] * sysa[9][e, j]
+            K = sysa[8][e, 0]
+            pot = 0.8 * K * max(d, 0.0) ** 2.5 if etype[e] != PWL_STOP else K * max(d, 0.0) ** 2
+            dtc[e] = contact_step(e, math.sqrt(dd * dd + pot * winv), 0.0, sysa, spc)
 
     n_stored = 0
     n_steps = 0
@@ -722,49 +750,36 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
         if n_steps >= max_steps:
             status = ERR_MAX_STEPS
             break
-        tg = t0 + (k_grid + 1) * dt if k_grid + 1 < n_grid else t_end
+        n_in = 0
+        for e in range(ne):
+            if disc[e, 0] != 0.0:
+                n_in += 1
+                if phase == 0:
+                    pe = e
         ev = -1
         tau_ev = 0.0
         hit_grid = False
         landed = False
-        if fixed and phase == 2:
-            # exit phase: is it still valid (one element in contact, delta' < 0)?
+        enter_exit = False
+        if phase == 2:
             y, yd, ydd, st = excite(t, xc, xp, xtab)
             d, dd = kinematics(pe, s, y, yd, sysa)
-            if disc[pe, 0] == 0.0 or dd >= 0.0 or d <= 0.0:
+            if disc[pe, 0] == 0.0 or dd >= 0.0 or n_in != 1:
                 phase = 0
-            else:
-                g_u = math.sqrt(d)
-        if fixed and phase == 0 and graded and events_on:
-            # enter the exit phase when the contact is predicted to end within n_grade steps
-            n_in = 0
-            for e in range(ne):
-                if disc[e, 0] != 0.0:
-                    n_in += 1
-                    pe = e
-            if n_in == 1 and steps_in_contact[pe] > 0:
-                y, yd, ydd, st = excite(t, xc, xp, xtab)
-                d, dd = kinematics(pe, s, y, yd, sysa)
-                if dd < 0.0 and d > 0.0:
-                    dd2 = sysa[6][pe] * ydd
-                    for j in range(N):
-                        dd2 += sysa[5][pe, j] * f0[N + j]
-                    trem = d / (-dd)
-                    if trem <= n_grade * dtc[pe] and abs(dd2) * trem <= 0.5 * (-dd):
-                        phase = 2
-                        g_u = math.sqrt(d)
-                        g_h = g_u / n_grade
-        if fixed and phase == 1:
-            # onset phase: uniform steps in sigma = sqrt(t - t_onset), cut at the grid point
+        if phase == 1 and n_in != 1:
+            phase = 0
+        if phase == 1:
+            # onset phase: uniform steps in sigma = sqrt(t - t_onset)
             hs = min(g_h, g_end - g_u)
-            if g_t0 + (g_u + hs) ** 2 >= tg:
-                hs = math.sqrt(tg - g_t0) - g_u
-                hit_grid = True
+            cut = False
+            if g_t0 + (g_u + hs) ** 2 >= t_end:
+                hs = math.sqrt(t_end - g_t0) - g_u
+                cut = True
             st, t_new = rk_step_graded(meth, 1, g_u, hs, g_t0, pe, s, t, P, dvm, disc, want_var,
                                        sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel)
             n_rhs += ns
-            if hit_grid:
-                t_new = tg
+            if cut:
+                t_new = t_end
             ok = st == 0
             if ok:
                 st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
@@ -781,83 +796,59 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
             g_u += hs
             if g_u >= g_end * (1.0 - 1e-12):
                 phase = 0
-        elif fixed and phase == 2:
+        elif phase == 2:
+            # exit phase: uniform steps in u = sqrt(delta) down to u = 0
             hu = min(g_h, g_u)
+            if g_u - hu < 1e-9 * g_h:
+                hu = g_u
             st, t_new = rk_step_graded(meth, 2, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, want_var,
                                        sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel)
             n_rhs += ns
-            if st != 0 or t_new >= tg or t_new <= t:
-                # would pass the grid point (or the graded step failed): time step to it
-                phase = 0 if st != 0 else 2
-                h = tg - t
-                st = rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
-                             s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
-                n_rhs += ns - (0 if want_var else 1)
-                if st != 0:
-                    status = st
-                    break
-                t_new = tg
-                hit_grid = True
-                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
-                n_rhs += 1
-                yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
-                d, dd = kinematics(pe, s_new, yv, ydv, sysa)
-                if d < 0.0:
-                    # the contact ended before the grid point after all: locate it
-                    tau, st = _crossing(meth, t, h, s, s_new, f0, f1, P, dvm, disc, pe, sysa, xc,
-                                        xp, xtab, s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w)
-                    if st != 0:
-                        status = st
+            if st != 0 or t_new > t_end or t_new <= t:
+                phase = 0  # the record ends inside the exit phase (or it failed): time steps
+                continue
+            g_u -= hu
+            st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
+            n_rhs += 1
+            if g_u <= 0.0:
+                # landed on delta = 0 up to the truncation error: polish to round-off by Newton
+                # steps in time, then switch
+                for _ in range(4):
+                    yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
+                    d, dd = kinematics(pe, s_new, yv, ydv, sysa)
+                    if d == 0.0 or abs(d) <= 1e-15 * (abs(yv) + abs(sysa[7][pe]) + 1e-300):
                         break
-                    if tau >= 0.0:
-                        ev = pe
-                        tau_ev = tau
-                        phase = 0
-            else:
-                g_u -= hu
-                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
-                n_rhs += 1
-                if g_u <= 0.0:
-                    # landed on delta = 0 up to the truncation error: polish to round-off by
-                    # Newton steps in time, then switch
+                    tau = -d / dd
                     for q in range(n):
                         s_try[q] = s_new[q]
-                    for _ in range(4):
-                        yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
-                        d, dd = kinematics(pe, s_new, yv, ydv, sysa)
-                        if abs(d) <= 1e-15 * (abs(yv) + abs(sysa[7][pe]) + 1e-300) or d == 0.0:
-                            break
-                        tau = -d / dd
                         if want_var:
-                            for q in range(n):
-                                for c in range(m):
-                                    dummyP[q, c] = P_new[q, c]
-                        for q in range(n):
-                            s_try[q] = s_new[q]
-                        st = rk_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var, sysa, xc,
-                                     xp, xtab, f1, s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
-                        t_new = t_new + tau
-                        st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1,
-                                   KP[0], fel)
-                    ev = pe
-                    tau_ev = t_new - t
-                    landed = True
-                    phase = 0
+                            for c in range(m):
+                                dummyP[q, c] = P_new[q, c]
+                    st = rk_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var, sysa, xc,
+                                 xp, xtab, f1, s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+                    t_new = t_new + tau
+                    st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1,
+                               KP[0], fel)
+                ev = pe
+                tau_ev = t_new - t
+                landed = True
+                phase = 0
         else:
             # ---- an ordinary step in time
             if fixed:
-                hc = np.inf
-                for e in range(ne):
-                    if disc[e, 0] != 0.0 and dtc[e] < hc:
-                        hc = dtc[e]
-                hit_grid = True
-                h = tg - t
-                if hc < h:
+                tg = t0 + (k_grid + 1) * dt if k_grid + 1 < n_grid else t_end
+                if n_in > 0:
+                    hc = np.inf
+                    for e in range(ne):
+                        if disc[e, 0] != 0.0 and dtc[e] < hc:
+                            hc = dtc[e]
                     h = hc
-                    hit_grid = False
-                    if tg - t - h < 1e-9 * h:  # do not leave a sliver before the grid point
-                        h = tg - t
+                    if h >= t_end - t:
+                        h = t_end - t
                         hit_grid = True
+                else:
+                    h = tg - t
+                    hit_grid = True
             else:
                 if h >= t_end - t:
                     h = t_end - t
@@ -882,7 +873,10 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                     n_steps += 1
                     continue
             if fixed:
-                t_new = tg if hit_grid else t + h
+                if hit_grid:
+                    t_new = t_end if n_in > 0 else tg
+                else:
+                    t_new = t + h
             else:
                 t_new = t_end if t + h >= t_end else t + h
             st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
@@ -894,8 +888,9 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                 for e in range(ne):
                     if not has_event(etype[e]):
                         continue
-                    tau, st = _crossing(meth, t, h, s, s_new, f0, f1, P, dvm, disc, e, sysa, xc,
-                                        xp, xtab, s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w)
+                    tau, st = _crossing(meth, t, t_new - t, s, s_new, f0, f1, P, dvm, disc, e,
+                                        sysa, xc, xp, xtab, s_try, dummyP, KS, KP, ytmp, Ptmp,
+                                        fel, err_w)
                     if st != 0:
                         status = st
                         break
@@ -904,17 +899,36 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                         ev = e
                 if status != 0:
                     break
-        if ev >= 0 and not landed:
-            # re-take the step up to the boundary
-            st = rk_step(meth, t, tau_ev, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
-                         s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
-            if st != 0:
-                status = st
-                break
-            t_new = t + tau_ev
-            hit_grid = False
-            st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
-            n_rhs += 1
+                # the start of the graded exit phase: delta falls through d_sw
+                if fixed and graded and n_in == 1 and phase == 0:
+                    if d_sw[pe] > 0.0:
+                        y0, yd0, ydd0, st2 = excite(t, xc, xp, xtab)
+                        y1, yd1, ydd1, st2 = excite(t_new, xc, xp, xtab)
+                        d0, dd0 = kinematics(pe, s, y0, yd0, sysa)
+                        d1, dd1 = kinematics(pe, s_new, y1, yd1, sysa)
+                        if d0 > d_sw[pe] and d1 <= d_sw[pe] and dd0 < 0.0:
+                            tau, st = locate(meth, t, 0.0, t_new - t, d_sw[pe] - d0,
+                                             d_sw[pe] - d1, s, P, dvm, disc, pe, -1.0, d_sw[pe],
+                                             sysa, xc, xp, xtab, f0, s_try, dummyP, KS, KP, ytmp,
+                                             Ptmp, fel, err_w)
+                            if st != 0:
+                                status = st
+                                break
+                            if ev < 0 or tau < tau_ev:
+                                ev = -1
+                                tau_ev = tau
+                                enter_exit = True
+            if ev >= 0 or enter_exit:
+                # re-take the step up to the boundary
+                st = rk_step(meth, t, tau_ev, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
+                             s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+                if st != 0:
+                    status = st
+                    break
+                t_new = t + tau_ev
+                hit_grid = False
+                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
+                n_rhs += 1
         # ---- accept the step (t, s) -> (t_new, s_new)
         n_steps += 1
         for e in range(ne):
@@ -922,14 +936,28 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                 steps_in_contact[e] += 1
         if track_xmax:
             step_extrema(s, f0, s_new, f1, t_new - t, N, xmax)
-        if not fixed and store_every > 0:
-            while k_grid < n_grid:
-                kk = k_grid + 1
-                tgk = t0 + kk * dt if kk < n_grid else t_end
-                if tgk > t_new:
-                    break
-                k_grid = kk
-                if kk % store_every == 0 or kk == n_grid:
+        if fixed and graded and n_in == 1 and disc[pe, 0] != 0.0 and t_new > t:
+            # the maximum penetration of this contact sets where the graded exit phase starts
+            y0, yd0, ydd0, st2 = excite(t, xc, xp, xtab)
+            y1, yd1, ydd1, st2 = excite(t_new, xc, xp, xtab)
+            d0, dd0 = kinematics(pe, s, y0, yd0, sysa)
+            d1, dd1 = kinematics(pe, s_new, y1, yd1, sysa)
+            if dd0 > 0.0 and dd1 <= 0.0:
+                th, dm = delta_extremum(pe, 1.0, t, t_new - t, s, s_new, f0, f1, sysa, xc, xp, xtab)
+                d_sw[pe] = KAPPA * max(dm, d0, d1)
+        # grid samples passed by this step: exact at a grid hit, dense output otherwise
+        while k_grid < n_grid:
+            kk = k_grid + 1
+            tgk = t0 + kk * dt if kk < n_grid else t_end
+            exact = hit_grid and (kk == n_grid or tgk >= t_new - 1e-15 * abs(t_new))
+            if tgk > t_new and not exact:
+                break
+            k_grid = kk
+            if store_every > 0 and (kk % store_every == 0 or kk == n_grid):
+                if exact:
+                    n_stored = _store(n_stored, t_new, s_new, disc, xc, xp, xtab, sysa,
+                                      out_t, out_s, out_d, out_f)
+                else:
                     th = (tgk - t) / (t_new - t)
                     for i in range(N):
                         xk, vk = hermite5(s[i], s[N + i], f0[N + i], s_new[i], s_new[N + i],
@@ -938,6 +966,8 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                         ytmp[N + i] = vk
                     n_stored = _store(n_stored, tgk, ytmp, disc, xc, xp, xtab, sysa,
                                       out_t, out_s, out_d, out_f)
+            if exact:
+                break
         t = t_new
         for q in range(n):
             s[q] = s_new[q]
@@ -946,6 +976,10 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
             for q in range(n):
                 for c in range(m):
                     P[q, c] = P_new[q, c]
+        if enter_exit:
+            phase = 2
+            g_u = math.sqrt(d_sw[pe])
+            g_h = g_u / n_grade
         # ---- switch the discrete state at an event
         if ev >= 0:
             y, yd, ydd, st = excite(t, xc, xp, xtab)
@@ -963,7 +997,11 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                 disc[ev, 1] = dd if dd > 0.0 else 1e-12
                 n_imp += 1
                 steps_in_contact[ev] = 0
-                dtc[ev] = contact_step(ev, disc[ev, 1], sysa, spc)
+                d_sw[ev] = -1.0
+                dd2 = sysa[6][ev] * ydd
+                for j in range(N):
+                    dd2 += sysa[5][ev, j] * f0[N + j]
+                dtc[ev] = contact_step(ev, disc[ev, 1], dd2, sysa, spc)
                 if want_var:
                     # sensitivity of the onset velocity: d vminus = [0,w] P + delta'' dt_e,
                     # dt_e = -([w,0] P) / delta'
@@ -978,36 +1016,28 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                             wx += ew[ev, j] * P[j, c]
                             wv += ew[ev, j] * P[N + j, c]
                         dvm[ev, c] = wv - dd2 * wx / disc[ev, 1]
-                if fixed and graded and dd > 0.0:
-                    n_in = 0
-                    for e in range(ne):
-                        if disc[e, 0] != 0.0:
-                            n_in += 1
-                    if n_in == 1:
-                        phase = 1
-                        pe = ev
-                        g_t0 = t
-                        g_u = 0.0
-                        g_end = math.sqrt(n_grade * dtc[ev])
-                        g_h = g_end / n_grade
+                if fixed and graded and dd > 0.0 and n_in == 0:
+                    phase = 1
+                    pe = ev
+                    g_t0 = t
+                    g_u = 0.0
+                    g_end = math.sqrt(n_grade * dtc[ev])
+                    g_h = g_end / n_grade
+                else:
+                    phase = 0
             else:
                 disc[ev, 0] = 0.0
                 n_contacts += 1
                 if steps_in_contact[ev] < min_spc:
                     min_spc = steps_in_contact[ev]
                 dtc[ev] = np.inf
+                d_sw[ev] = -1.0
                 phase = 0
             # f0 after the switch (the field is continuous; the law's memory changed)
             st = deriv(t, s, P, dvm, disc, False, sysa, xc, xp, xtab, f0, KP[0], fel)
             n_rhs += 1
-        # ---- grid bookkeeping (fixed step)
-        if fixed and hit_grid:
-            k_grid += 1
-            if store_every > 0 and (k_grid % store_every == 0 or k_grid == n_grid):
-                n_stored = _store(n_stored, t, s, disc, xc, xp, xtab, sysa,
-                                  out_t, out_s, out_d, out_f)
-            if k_grid >= n_grid:
-                t = t_end
+        if k_grid >= n_grid:
+            t = t_end
         if not fixed:
             if en == 0.0:
                 fac = 5.0
