@@ -536,10 +536,10 @@ def _vertex(f, x):
 
 
 def _superharmonics(branches, model, integrator, orders=(2, 3), window=0.15, min_ratio=0.15):
-    """Superharmonic resonances of order k on the harmonic (order-1) branches: the highest local
-    maximum of xmax along a branch with k f within ``window`` (relative) of the main resonance
-    (the frequency of the largest xmax), where the k-th harmonic of the relative response is at
-    least ``min_ratio`` of the first. The frequency is that of the branch point (tolerance: half
+    """Superharmonic resonances of order k on the harmonic (order-1) branches: among the local
+    maxima of xmax along a branch with k f within ``window`` (relative) of the main resonance
+    (the frequency of the largest xmax), the one where the k-th harmonic of the relative
+    response is largest, if it is at least ``min_ratio`` of the first. The frequency is that of the branch point (tolerance: half
     the distance to its neighbours) of the vertex of a parabola through the peak point and its
     neighbours."""
     out = []
@@ -555,16 +555,21 @@ def _superharmonics(branches, model, integrator, orders=(2, 3), window=0.15, min
             if x[i] > x[i - 1] and x[i] >= x[i + 1]:
                 peaks.append((bi, i, float(b.frequency[i]), float(x[i])))
     for k in orders:
-        cand = [q for q in peaks if abs(k * q[2] / f_res - 1) < window]
-        for bi, i, f, xm in sorted(cand, key=lambda q: -q[3]):
+        best = None
+        for bi, i, f, xm in peaks:
+            if abs(k * f / f_res - 1) >= window:
+                continue
             b = branches[bi]
             X = _harmonic_amplitudes(model, b.amplitude[i], f, b.state0[i])
-            ratio = float(X[k] / X[1])
-            if ratio >= min_ratio:
-                fp, xp = _vertex(b.frequency[i - 1:i + 2], b.xmax[i - 1:i + 2])
-                tol = 0.5 * float(max(abs(b.frequency[i + 1] - f), abs(f - b.frequency[i - 1])))
-                out.append(Superharmonic(fp, xp, k, bi, ratio, tol))
-                break
+            if X[k] >= min_ratio * X[1] and (best is None or X[k] > best[0]):
+                best = (X[k], float(X[k] / X[1]), bi, i)
+        if best is not None:
+            _, ratio, bi, i = best
+            b = branches[bi]
+            f = b.frequency[i]
+            fp, xp = _vertex(b.frequency[i - 1:i + 2], b.xmax[i - 1:i + 2])
+            tol = 0.5 * float(max(abs(b.frequency[i + 1] - f), abs(f - b.frequency[i - 1])))
+            out.append(Superharmonic(fp, xp, k, bi, ratio, tol))
     return out
 
 

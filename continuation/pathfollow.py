@@ -72,8 +72,8 @@ class Tracer:
 
     def __init__(self, *, p_min=-np.inf, p_max=np.inf, ds=0.02, ds_min=1e-7, ds_max=0.1,
                  max_angle=0.15, max_points=3000, tol=1e-10, bif_tol=1e-10, detect=True,
-                 max_iter=8, ds_jump=1e-4, jump_steps=(1e-5, 1e-4, 1e-3), jump_max_distance=0.05,
-                 grazing_iter=8):
+                 max_iter=8, jump_after=2, jump_steps=(1e-5, 1e-4, 1e-3), jump_max_distance=0.05,
+                 grazing_iter=8, contraction=0.5):
         self.p_min, self.p_max = p_min, p_max
         self.ds0, self.ds_min, self.ds_max = ds, ds_min, ds_max
         self.max_angle = max_angle
@@ -82,10 +82,11 @@ class Tracer:
         self.bif_tol = bif_tol
         self.detect = detect
         self.max_iter = max_iter
-        self.ds_jump = ds_jump
+        self.jump_after = jump_after
         self.jump_steps = tuple(jump_steps)
         self.jump_max_distance = jump_max_distance
         self.grazing_iter = grazing_iter
+        self.contraction = contraction
         self.n_evaluations = 0
         self.debug = False
 
@@ -98,12 +99,15 @@ class Tracer:
         z = zeta_pred.copy()
         Jp = None
         dz_norm = np.inf
+        res_prev = np.inf
+        self.impacts_seen = set()
         for it in range(1, self.max_iter + 1):
             try:
                 ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=True, jac_p=Jp is None)
             except ConvergenceError:
                 break
             self.n_evaluations += 1
+            self.impacts_seen.add(ev.n_impacts)
             if Jp is None:
                 Jp = ev.Jp
             ev.Jp = Jp
@@ -113,6 +117,10 @@ class Tracer:
                 break
             if res < self.tol or (res < 100 * self.tol and dz_norm < 1e-9):
                 return z, ev, it
+            if it >= 3 and res > self.contraction * res_prev:
+                break  # not converging like Newton: the map is not smooth here, or the step is
+                # too long; give up early (the caller halves the step)
+            res_prev = res
             A = np.vstack([J, t[None, :]])
             try:
                 dz = np.linalg.solve(A, -np.r_[r, t @ (z - zeta_pred)])
@@ -141,7 +149,8 @@ class Tracer:
         iterations. Where the number of impacts per period changes between two points (a
         grazing orbit in between: the flow map has a square-root singularity there), the
         grazing point is bracketed; where the corrector fails repeatedly, the branch is
-        continued by a natural-parameter step beyond the failure (``jump``).
+        continued by a natural-parameter step beyond the failure (``jump``) when the failed
+        corrector's iterates changed the number of impacts (a grazing point ahead).
         Returns (points, located, reason)."""
         w, wp = prob.scale_u, prob.scale_p
         z = np.r_[np.asarray(u0) / w, p0 / wp]
@@ -157,6 +166,8 @@ class Tracer:
         z_first = z.copy()
         reason = "max_points"
         n_fail = 0
+        tried_jump = near_grazing = False
+        ds_ok = ds
         self._creeps = 0
         while len(pts) < self.max_points:
             jumped = False
@@ -169,25 +180,30 @@ class Tracer:
                 ok = False
                 iters = self.max_iter
                 angle = np.inf
+            if not ok and self.impacts_seen - {pts[-1].n_impacts}:
+                near_grazing = True  # the corrector's iterates changed the number of impacts
             if self.debug:
                 print("ds %.3g ok %s iters %d angle %.3g p %.9g" % (ds, ok, iters, angle,
                                                                  z[-1] * prob.scale_p))
             if not ok:
                 n_fail += 1
                 ds *= 0.5
-                if ds < self.ds_jump and self.jump_steps:
+                if (n_fail >= self.jump_after and near_grazing and not tried_jump
+                        and self.jump_steps):
+                    tried_jump = True
                     res = self.jump(prob, pts[-1], t)
-                    if res is None:
+                    if res is not None:
+                        zn, evn, tn = res
+                        jumped = True
+                        ds = ds_ok
+                if not jumped:
+                    if ds < self.ds_min:
                         reason = "step underflow"
                         break
-                    zn, evn, tn = res
-                    jumped = True
-                    ds = self.ds0
-                elif ds < self.ds_min:
-                    reason = "step underflow"
-                    break
-                else:
                     continue
+            tried_jump = near_grazing = False
+            if not jumped:
+                ds_ok = ds
             n_fail = 0
             if not jumped:
                 self._creeps = 0
@@ -288,7 +304,8 @@ class Tracer:
             try:
                 u = prob.settle(pt.u, pt.p, p_new)
                 u, ev, _, _ = prob.solve(u, p_new, tol=self.tol, max_iter=self.max_iter + 4)
-                if abs(ev.xmax - pt.xmax) < 0.1 * abs(pt.xmax):
+                if (ev.n_impacts != pt.n_impacts and abs(ev.xmax - pt.xmax) < 0.1 * abs(pt.xmax)
+                        and np.max(np.abs(u / w - z[:-1])) < 10 * self.jump_max_distance):
                     return accept(u, p_new)
             except ConvergenceError:
                 pass
