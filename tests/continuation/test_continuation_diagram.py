@@ -43,11 +43,18 @@ def test_harmonic_branch_passes_grazing_points_without_gaps(grazing_diagram):
         assert np.min(np.abs(d[i])) < 1e-3 * np.ptp(d)
 
 
-def test_no_branch_or_bifurcation_twice(grazing_diagram):
+@pytest.fixture(scope="module")
+def pd_diagram():
+    m = nlbeam.BeamImpact.paper()
+    return m, C.frequency_response(m, A, (15.0, 19.0), orders=(1, 2), n_grid=5)
+
+
+def test_no_branch_or_bifurcation_twice(pd_diagram, grazing_diagram):
     """A branch that runs onto a traced one stops there: apart from its end points, no point of
     one branch lies on another, except on the other's first or last segment (the step that ran
-    onto it)."""
-    m, frc = grazing_diagram
+    onto it). No bifurcation is listed twice."""
+    m, frc = pd_diagram
+    assert len([b for b in frc.branches if b.order == 1]) >= 1
     for i, b in enumerate(frc.branches):
         for j, o in enumerate(frc.branches):
             if i == j or len(o.frequency) < 4:
@@ -58,8 +65,11 @@ def test_no_branch_or_bifurcation_twice(grazing_diagram):
                   if _on_branch([trimmed], b.order, b.frequency[k], b.xmax[k],
                                 b.state0[k][None, :]) is not None]
             assert on == []
-    keys = [(bf.kind, bf.order, round(bf.frequency, 6)) for bf in frc.bifurcations]
-    assert len(keys) == len(set(keys))
+    for m, frc in (pd_diagram, grazing_diagram):
+        keys = [(bf.kind, bf.order, round(bf.frequency, 6)) for bf in frc.bifurcations]
+        assert len(keys) == len(set(keys))
+    pds = [bf for bf in pd_diagram[1].bifurcations if bf.kind == "period-doubling"]
+    assert len(pds) >= 2
 
 
 def test_superharmonic_resonance_of_order_2_against_brute_force():
