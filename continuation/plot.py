@@ -26,12 +26,12 @@ def plot_frequency_response(frc, ax=None, *, scale=1e3, unit="mm", grazing=True)
             if seg.size == 0:
                 continue
             seg = np.r_[seg, seg[-1] + 1] if seg[-1] + 1 < len(x) else seg
-            label = None
-            if b.order not in seen:
-                label = "harmonic (n = 1)" if b.order == 1 else f"1/{b.order} subharmonic"
+            if b.order not in seen:  # legend entry: a solid line in the order's colour
+                ax.plot([], [], "-", color=c, lw=1.3, label="harmonic (n = 1)" if b.order == 1
+                        else f"1/{b.order} subharmonic")
                 seen.add(b.order)
             ax.plot(x[seg], y[seg], "-" if s[seg[0]] else "--", color=c,
-                    lw=1.3 if s[seg[0]] else 0.9, label=label)
+                    lw=1.3 if s[seg[0]] else 0.9)
     done = set()
     for bf in frc.bifurcations:
         if bf.kind == "grazing" and not grazing:

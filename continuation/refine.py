@@ -125,19 +125,68 @@ def locate_extended(model, amplitude, frequency, order, state0, kind, integrator
     return float(p), prob.state_at_zero(u, p)[0], float(solve_error)
 
 
-def refine(model, bifurcation, amplitude=None, *, levels=LEVELS, segments=1, tol=1e-9):
+def _next_level(integ):
+    spc = integ.steps_per_contact
+    return Integrator(method=integ.method, dt_scale=integ.dt_scale / 2,
+                      steps_per_contact=None if spc is None else 2 * spc, rtol=integ.rtol,
+                      atol=integ.atol)
+
+
+def refine(model, bifurcation, amplitude=None, *, levels=LEVELS, segments=1, tol=1e-9,
+           target_digits=8.0, max_levels=6):
     """Refine a fold or period doubling (a continuation.Bifurcation of a frequency diagram) at
-    each integrator setting in ``levels`` (coarse to fine), each starting from the previous one.
-    Returns a Refined."""
+    each integrator setting in ``levels`` (coarse to fine), each starting from the previous one;
+    while the estimated digits are below ``target_digits``, halve the step again (up to
+    ``max_levels`` levels in all; fixed-step levels only). If the first level does not converge
+    from the diagram's point, it is approached through dt_scale 1/2 first. Returns a Refined."""
     A = bifurcation_amplitude(bifurcation, amplitude)
     f, s0 = bifurcation.frequency, bifurcation.state0
-    vals, secs = [], []
-    for integ in levels:
+    vals, secs, errs = [], [], []
+    levels = list(levels)
+
+    def one(integ, f, s0):
         t0 = time.perf_counter()
-        f, s0, err = locate_extended(model, A, f, bifurcation.order, s0, bifurcation.kind,
-                                     integ, segments=segments, tol=tol)
+        out = locate_extended(model, A, f, bifurcation.order, s0, bifurcation.kind, integ,
+                              segments=segments, tol=tol)
+        return out, time.perf_counter() - t0
+
+    try:
+        (f, s0, err), sec = one(levels[0], f, s0)
+    except ConvergenceError:
+        if levels[0].method == "adaptive":
+            raise
+        t0 = time.perf_counter()
+        bridge = Integrator(dt_scale=2 * levels[0].dt_scale,
+                            steps_per_contact=None if levels[0].steps_per_contact is None
+                            else levels[0].steps_per_contact / 2)
+        (f, s0, _), _ = one(bridge, f, s0)
+        (f, s0, err), sec = one(levels[0], f, s0)
+        sec += time.perf_counter() - t0
+    vals.append(f)
+    secs.append(sec)
+    errs.append(err)
+    k = 1
+    while True:
+        if k < len(levels):
+            integ = levels[k]
+        elif (k < max_levels and levels[-1].method != "adaptive"
+              and _estimate(vals, errs)[2] < target_digits):
+            integ = _next_level(levels[-1])
+            levels.append(integ)
+        else:
+            break
+        (f, s0, err), sec = one(integ, f, s0)
         vals.append(f)
-        secs.append(time.perf_counter() - t0)
+        secs.append(sec)
+        errs.append(err)
+        k += 1
+    value, tolv, digits, ext, ratios = _estimate(vals, errs)
+    return Refined(bifurcation.kind, bifurcation.order, np.array(vals), ext, float(value),
+                   float(tolv), float(digits), ratios, np.array(secs), tuple(levels), s0)
+
+
+def _estimate(vals, errs):
+    """(value, tolerance, digits, extrapolants, ratios) from the values at successive halvings."""
     vals = np.array(vals)
     d = np.diff(vals)
     ratios = d[:-1] / np.where(d[1:] != 0, d[1:], np.inf)
@@ -147,14 +196,12 @@ def refine(model, bifurcation, amplitude=None, *, levels=LEVELS, segments=1, tol
         value, tolv = ext[-1], abs(ext[-1] - ext[-2])
     else:
         value, tolv = vals[-1], (abs(d[-1]) if len(d) else np.inf)
-    tolv = max(tolv, err, 1e-15 * abs(value))
-    digits = -np.log10(tolv / abs(value))
-    return Refined(bifurcation.kind, bifurcation.order, vals, ext, float(value), float(tolv),
-                   float(digits), ratios, np.array(secs), tuple(levels), s0)
+    tolv = max(tolv, errs[-1], 1e-15 * abs(value))
+    return value, tolv, -np.log10(tolv / abs(value)), ext, ratios
 
 
 def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders=None,
-                        levels=LEVELS, segments=1, tol=1e-9):
+                        levels=LEVELS, segments=1, tol=1e-9, target_digits=8.0, max_levels=6):
     """Refine the folds / period doublings of a frequency diagram in place: each listed
     Bifurcation gets ``refined`` (a Refined), its ``frequency`` and ``value`` become the
     extrapolated value and ``tolerance`` the larger of its bracket and the integrator's error
@@ -166,10 +213,16 @@ def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders
     for bf in frc.bifurcations:
         if bf.kind not in kinds or (orders is not None and bf.order not in orders):
             continue
-        try:
-            r = refine(model, bf, frc.amplitude, levels=levels, segments=segments, tol=tol)
-        except ConvergenceError as exc:
-            out.append((bf, exc))
+        r = None
+        for segs in (segments, 4 * segments):  # multiple shooting as the fallback
+            try:
+                r = refine(model, bf, frc.amplitude, levels=levels, segments=segs, tol=tol,
+                           target_digits=target_digits, max_levels=max_levels)
+                break
+            except ConvergenceError as exc:
+                r = exc
+        if isinstance(r, ConvergenceError):
+            out.append((bf, r))
             continue
         bf.refined = r
         bf.frequency = bf.value = r.value
