@@ -377,6 +377,7 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     chunk_warnings = {}
     n_impacts = n_steps = n_chunks = n_samples = 0
     min_spc = 0
+    n_bad_onsets, t_bad_onset = 0, None
     k0 = 0
     while k0 < n_total:
         k1 = min(k0 + m, n_total)
@@ -396,6 +397,19 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
                 chunk_warnings[key] = [w, 0]
             chunk_warnings[key][1] += 1
         state, disc = tr.state_end, tr.disc_end
+        if tr.events is not None and tr.n_events:
+            ev = tr.events[:min(tr.n_events, tr.events.shape[0])]
+            # an onset with delta' <= 0 that starts a contact of nonzero duration (a
+            # zero-length onset/end pair at one instant is a harmless grazing touch)
+            for e in np.unique(ev[:, 1]).astype(int):
+                ee = ev[ev[:, 1] == e]
+                t_next = np.append(ee[1:, 0], np.inf if tr.disc_end[e, 0] else ee[-1, 0])
+                lasts = t_next - ee[:, 0] > 1e-12 * np.maximum(np.abs(ee[:, 0]), 1.0)
+                bad = (ee[:, 2] == 1) & ~(ee[:, 3] > 0) & lasts
+                if np.any(bad):
+                    n_bad_onsets += int(np.sum(bad))
+                    t1 = float(ee[np.argmax(bad), 0])
+                    t_bad_onset = t1 if t_bad_onset is None else min(t_bad_onset, t1)
         n_impacts += tr.n_impacts
         n_steps += tr.n_steps
         n_chunks += 1
@@ -459,6 +473,16 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
         res.message = "completed with warnings: " + "; ".join(msgs)
         for (w, n), text in zip(chunk_warnings.values(), msgs):
             warnings.warn(text, w.category, stacklevel=2)
+    if n_bad_onsets:
+        # a contact onset with delta' <= 0 (a grazing re-entry just after a contact end) makes
+        # the Lankarani-Nikravesh damping term change sign and feed energy in: the record is
+        # not trustworthy from there on
+        text = (f"{n_bad_onsets} contact onset(s) with penetration rate <= 0 (first at t = "
+                f"{t_bad_onset:.9g} s): a grazing re-contact the integrator did not resolve; the "
+                "statistics after it are unreliable; change dt or the seed")
+        res.success = False
+        res.message = ("failed: " + text + ("; " + res.message if res.message != "completed" else ""))
+        warnings.warn(text, RuntimeWarning, stacklevel=2)
     res.wall_time = time.perf_counter() - t_wall
     return res
 
