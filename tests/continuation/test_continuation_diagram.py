@@ -50,9 +50,10 @@ def pd_diagram():
 
 
 def test_no_branch_or_bifurcation_twice(pd_diagram, grazing_diagram):
-    """A branch that runs onto a traced one stops there: apart from its end points, no point of
-    one branch lies on another, except on the other's first or last segment (the step that ran
-    onto it). No bifurcation is listed twice."""
+    """A branch that runs onto a traced one stops there: apart from its first and last three
+    points (a start next to a traced branch, the steps that ran onto one), no point of one
+    branch lies on another, except on the other's first or last segment. No bifurcation is
+    listed twice."""
     m, frc = pd_diagram
     assert len([b for b in frc.branches if b.order == 1]) >= 1
     for i, b in enumerate(frc.branches):
@@ -61,7 +62,7 @@ def test_no_branch_or_bifurcation_twice(pd_diagram, grazing_diagram):
                 continue
             trimmed = dataclasses.replace(o, frequency=o.frequency[1:-1], xmax=o.xmax[1:-1],
                                           state0=o.state0[1:-1])
-            on = [k for k in range(1, len(b.frequency) - 1)
+            on = [k for k in range(3, len(b.frequency) - 3)
                   if _on_branch([trimmed], b.order, b.frequency[k], b.xmax[k],
                                 b.state0[k][None, :]) is not None]
             assert on == []
