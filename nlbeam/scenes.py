@@ -165,7 +165,7 @@ PERIODIC_KEYS = {"amplitude": _real(0, lo_open=True, unit="m"),
                  "dt_scale": _real(0, lo_open=True)}
 STOCHASTIC_KEYS = {"band": _pair(0.0), "rms": _real(0, lo_open=True, unit="m"),
                    "psd_level": _real(0, lo_open=True, unit="m^2/Hz"),
-                   "lowpass": _real(0, lo_open=True, unit="Hz"), "seed": _int(0, 2 ** 63 - 1),
+                   "lowpass": _real(0, lo_open=True, unit="Hz"), "seed": _int(0),
                    "duration": _real(0, lo_open=True, unit="s"),
                    "transient": _real(0, unit="s"),
                    "psd_resolution": _real(0, lo_open=True, unit="Hz"),
@@ -547,7 +547,10 @@ def _load(job):
     return stochastic.load(job.path)
 
 
-def _store(job, result):
+def _store(job, result, log=None):
+    if log is not None and getattr(result, "success", True) is False:
+        log(f"nlbeam: warning: {job.kind}{' ' + job.variant if job.variant else ''}: "
+            f"{getattr(result, 'message', 'failed')}")
     os.makedirs(os.path.dirname(job.path), exist_ok=True)
     result.save(job.path)  # atomic (temporary name, then os.replace)
     write_text_atomic(job.path[:-3] + ".json", canonical_json(job.inputs) + "\n")
@@ -592,7 +595,7 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
             outs = run_jobs(_compute, [j.inputs for j in todo], workers=w, scheduler=scheduler,
                             progress=prog)
             for j, r in zip(todo, outs):
-                _store(j, r)
+                _store(j, r, log)
                 results[j.path] = r
         else:
             for n, j in enumerate(todo, start=1):
@@ -609,7 +612,7 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
                     inputs["_progress"] = progress
                 t = time.perf_counter()
                 r = _compute(inputs)
-                _store(j, r)
+                _store(j, r, log)
                 results[j.path] = r
                 log(f"nlbeam:   done in {time.perf_counter() - t:.1f} s")
     for j in jobs:

@@ -28,7 +28,7 @@ PARAMETERS = {
 }
 
 
-def _client(scheduler):
+def _client(scheduler, timeout):
     try:
         from distributed import Client
     except ImportError:
@@ -36,14 +36,15 @@ def _client(scheduler):
     if isinstance(scheduler, Client):
         return scheduler, False
     try:
-        return Client(str(scheduler), timeout="10s"), True
+        return Client(str(scheduler), timeout=f"{timeout}s"), True
     except (OSError, TimeoutError) as exc:
         raise RuntimeError(f"scheduler: cannot reach the Dask scheduler at {scheduler!r}: {exc}") from None
 
 
-def run_jobs(func, items, *, workers=None, scheduler=None, progress=None):
+def run_jobs(func, items, *, workers=None, scheduler=None, progress=None, connect_timeout=10.0):
     """``[func(x) for x in items]``, in order, here / on a process pool / on Dask (module doc).
-    progress: callable(done, total) called as results arrive."""
+    progress: callable(done, total) called as results arrive; connect_timeout: s to reach
+    the scheduler."""
     items = list(items)
     n = len(items)
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
@@ -52,7 +53,7 @@ def run_jobs(func, items, *, workers=None, scheduler=None, progress=None):
     if n == 0:
         return []
     if scheduler is not None:
-        client, own = _client(scheduler)
+        client, own = _client(scheduler, connect_timeout)
         try:
             from distributed import as_completed
 

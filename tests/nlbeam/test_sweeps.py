@@ -1,0 +1,107 @@
+"""nlbeam.sweeps and scene sweeps: one analysis per value, run in this process, on a local
+process pool, or on a Dask cluster (a LocalCluster on loopback here), with identical results
+and one cache."""
+import os
+
+import numpy as np
+import pytest
+
+import stochastic
+from nlbeam.scenes import SceneError, load_scene, run_scene
+from nlbeam.sweeps import run_jobs
+
+SWEEP = """
+[stochastic]
+band = [0.0, 100.0]
+rms = 1e-4
+seed = 1
+duration = 1.5
+transient = 0.1
+psd_resolution = 2.0
+
+[sweep]
+parameter = "seed"
+values = [1, 2]
+
+[[figure]]
+kind = "psd"
+file = "psd.png"
+
+[[table]]
+kind = "moments"
+file = "moments.csv"
+"""
+
+
+def _square(x):
+    return x * x
+
+
+def test_run_jobs_keeps_order_here_and_on_a_pool():
+    xs = list(range(7))
+    assert run_jobs(_square, xs, workers=1) == [x * x for x in xs]
+    assert run_jobs(_square, xs, workers=2) == [x * x for x in xs]
+    assert run_jobs(_square, []) == []
+    with pytest.raises(ValueError, match="workers"):
+        run_jobs(_square, xs, workers=0)
+
+
+def test_sweep_values_are_validated_like_the_key(tmp_path):
+    p = tmp_path / "s.toml"
+    p.write_text(SWEEP.replace("values = [1, 2]", "values = [1, -2]"))
+    with pytest.raises(SceneError, match=r"s.toml:12: sweep.values: each value: must be >= 0"):
+        load_scene(p)
+    p.write_text(SWEEP.replace('parameter = "seed"', 'parameter = "amplitude"'))
+    with pytest.raises(SceneError, match="no \\[periodic\\]"):
+        load_scene(p)
+
+
+def _psds(report):
+    return [stochastic.load(j.path).psd("delta") for j in report.jobs]
+
+
+@pytest.fixture(scope="module")
+def pool_run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("pool")
+    (d / "s.toml").write_text(SWEEP)
+    rep = run_scene(d / "s.toml", d / "out", workers=2, quiet=True)
+    return d, rep
+
+
+def test_sweep_on_local_pool_makes_one_result_per_value(pool_run):
+    d, rep = pool_run
+    assert rep.computed == 2 and [j.variant for j in rep.jobs] == ["seed=1", "seed=2"]
+    assert [stochastic.load(j.path).seed for j in rep.jobs] == [1, 2]
+    a, b = _psds(rep)
+    assert not np.array_equal(a[1], b[1])  # different seeds, different records
+    rows = (d / "out" / "moments.csv").read_text().splitlines()
+    assert len(rows) == 3 and rows[1].startswith("seed=1")
+    # the same sweep again: all cached
+    again = run_scene(d / "s.toml", d / "out", workers=2, quiet=True)
+    assert again.computed == 0
+
+
+def test_dask_cluster_gives_the_same_results_as_the_pool(pool_run, tmp_path):
+    pytest.importorskip("distributed")
+    from distributed import LocalCluster
+
+    d, rep = pool_run
+    (tmp_path / "s.toml").write_text(SWEEP)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      host="127.0.0.1", dashboard_address=None) as cluster:
+        drep = run_scene(tmp_path / "s.toml", tmp_path / "out", scheduler=cluster.scheduler_address,
+                         quiet=True)
+    assert drep.computed == 2
+    # same keys (cache file names) and bit-identical PSDs
+    assert [os.path.basename(j.path) for j in drep.jobs] == [os.path.basename(j.path) for j in rep.jobs]
+    for (f1, p1), (f2, p2) in zip(_psds(rep), _psds(drep)):
+        assert np.array_equal(f1, f2) and np.array_equal(p1, p2)
+    m1 = [stochastic.load(j.path).moments("delta")["kurtosis"] for j in rep.jobs]
+    m2 = [stochastic.load(j.path).moments("delta")["kurtosis"] for j in drep.jobs]
+    assert m1 == m2
+
+
+def test_unreachable_scheduler_is_a_clear_error(tmp_path):
+    pytest.importorskip("distributed")
+    with pytest.raises(RuntimeError, match="scheduler"):
+        run_jobs(_square, [1, 2], scheduler="tcp://127.0.0.1:9", connect_timeout=1.0)
