@@ -710,7 +710,7 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                 winv += sysa[5][e, j] * sysa[9][e, j]
             K = sysa[8][e, 0]
             pot = 0.8 * K * max(d, 0.0) ** 2.5 if etype[e] != PWL_STOP else K * max(d, 0.0) ** 2
-            dtc[e] = contact_step(e, math.sqrt(dd * dd + pot * winv), 0.0, sysa, spc)
+            dtc[e] = min(contact_step(e, math.sqrt(dd * dd + pot * winv), 0.0, sysa, spc), dt)
 
     n_stored = 0
     n_steps = 0
@@ -1002,6 +1002,8 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                 for j in range(N):
                     dd2 += sysa[5][ev, j] * f0[N + j]
                 dtc[ev] = contact_step(ev, disc[ev, 1], dd2, sysa, spc)
+                if fixed and dtc[ev] > dt:
+                    dtc[ev] = dt  # a soft contact never gets a longer step than free flight
                 if want_var:
                     # sensitivity of the onset velocity: d vminus = [0,w] P + delta'' dt_e,
                     # dt_e = -([w,0] P) / delta'

@@ -1,0 +1,122 @@
+"""Stress tests of the integrators: each case ends with a correct result or a clear error."""
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import nlbeam
+
+F40 = nlbeam.Harmonic(1e-4, 40.0)
+
+
+def agree(model, ex, t_end, rel, **kw):
+    """rk4 (defaults unless kw) and a tight adaptive run agree on the end state and on max|x|."""
+    a = nlbeam.integrate(model, ex, t_end, store_every=0, **kw)
+    b = nlbeam.integrate(model, ex, t_end, method="adaptive", rtol=1e-11, atol=1e-18,
+                         store_every=0)
+    assert np.all(np.isfinite(a.state_end)) and np.all(np.isfinite(b.state_end))
+    assert a.n_impacts == b.n_impacts
+    scale = np.abs(b.state_end) + np.array([b.xmax[0], b.xmax[0] * 2 * math.pi * 40])
+    assert np.max(np.abs(a.state_end - b.state_end) / scale) < rel, (a.state_end, b.state_end)
+    assert a.xmax[0] == pytest.approx(b.xmax[0], rel=rel)
+    return a, b
+
+
+@pytest.mark.parametrize("K", [1e4, 1e6, 1e8, 1e10, 1e12])
+def test_contact_stiffness_over_eight_decades(K):
+    # the contact step follows the contact duration, which scales like K^-2/5: every contact
+    # keeps its steps, and rk4 at default settings agrees with a tight adaptive run
+    model = nlbeam.BeamImpact.paper(K_hertz=K)
+    a, b = agree(model, F40, 0.25, rel=1e-4)
+    assert a.n_impacts >= 9
+    assert a.min_steps_per_contact >= 8
+
+
+def test_an_unresolved_contact_is_reported():
+    with pytest.warns(RuntimeWarning, match="only .* steps"):
+        tr = nlbeam.integrate(nlbeam.BeamImpact.paper(K_hertz=1e12), F40, 0.1,
+                              steps_per_contact=3, graded=False)
+    assert tr.min_steps_per_contact < 8
+
+
+@pytest.mark.parametrize("e", [0.05, 0.3, 0.7, 1.0])
+def test_restitution_range_without_damping(e):
+    model = nlbeam.BeamImpact.paper(e=e, b=0.0)
+    a, b = agree(model, F40, 0.25, rel=1e-4)
+    # free decay: energy never grows; e = 1 conserves it
+    tr = nlbeam.integrate(model, nlbeam.Harmonic(0.0, 1.0), 0.3, x0=[0.0, 0.05],
+                          steps_per_contact=128)
+    E = 0.5 * model.m * tr.v[:, 0] ** 2 + 0.5 * model.k * tr.x[:, 0] ** 2 \
+        + 0.4 * model.K_hertz * np.clip(tr.delta[:, 0], 0, None) ** 2.5
+    assert np.all(np.diff(E) <= 1e-7 * E[0])
+    if e == 1.0:
+        assert abs(E[-1] / E[0] - 1) < 1e-6
+    else:
+        assert E[-1] < 0.95 * E[0]
+
+
+def gapped_beam(gap):
+    el = nlbeam.Contact(0, "lankarani-nikravesh", 2.1e8, e=0.5, gap=gap)
+    return nlbeam.System([[37.75e-3]], [[0.16]], [[736.3]], (el,), "base",
+                         y_load=[736.3], yd_load=[0.16])
+
+
+@pytest.mark.parametrize("excess", [-1e-6, 1e-6, 1e-3])
+def test_grazing_a_stop_with_a_gap(excess):
+    # the steady linear response has max delta = A |H - 1|; put the gap just below / above it
+    m, k, b = 37.75e-3, 736.3, 0.16
+    f, A = 30.0, 1e-4
+    w = 2 * math.pi * f
+    H = (k + 1j * w * b) / (k - m * w * w + 1j * w * b)
+    dmax = A * abs(H - 1)
+    x0 = [A * H.real, -A * w * H.imag]
+    model = gapped_beam(dmax * (1 - excess))
+    tr = nlbeam.integrate(model, nlbeam.Harmonic(A, f), 0.5, x0=x0, store_every=0)
+    ref = nlbeam.integrate(model, nlbeam.Harmonic(A, f), 0.5, x0=x0, store_every=0,
+                           method="adaptive", rtol=1e-11, atol=1e-18)
+    assert np.all(np.isfinite(tr.state_end))
+    assert tr.n_impacts == ref.n_impacts
+    if excess < 0:
+        assert tr.n_impacts == 0
+        assert tr.xmax[0] == pytest.approx(A * abs(H), rel=1e-6)
+    else:
+        # touches with nearly zero penetration rate are found and resolved (after the first
+        # touches the orbit may leave for a coexisting impacting attractor: both methods agree)
+        assert tr.n_impacts > 0
+        assert tr.xmax[0] == pytest.approx(ref.xmax[0], rel=1e-4)
+
+
+@pytest.mark.parametrize("A", [1e-9, 1e-6, 1e-2])
+def test_very_small_and_very_large_excitation(A):
+    # 1e-9 m: penetrations of ~1e-10 m; 1e-2 m: penetration ~100 times the static deflection
+    # of the beam under its own weight (m g / k = 0.5 mm)
+    model = nlbeam.BeamImpact.paper()
+    ex = nlbeam.Harmonic(A, 40.0)
+    a = nlbeam.integrate(model, ex, 0.25, store_every=1)
+    b = nlbeam.integrate(model, ex, 0.25, method="adaptive", rtol=1e-11, atol=A * 1e-14,
+                         store_every=0)
+    assert a.n_impacts == b.n_impacts > 5
+    assert a.xmax[0] == pytest.approx(b.xmax[0], rel=1e-4)
+    # the impact dynamics of a zero-gap Hertz stop scale: max|x| / A depends weakly on A
+    assert 1 < a.xmax[0] / A < 30
+
+
+def test_denormal_penetration_and_zero_amplitude():
+    model = nlbeam.BeamImpact.paper()
+    with np.errstate(all="ignore"):
+        tr = nlbeam.integrate(model, nlbeam.Harmonic(0.0, 40.0), 0.05, x0=[1e-310, 0.0])
+    assert np.all(np.isfinite(tr.x)) and np.all(np.isfinite(tr.force))
+    assert tr.force[0, 0] == 0.0 or tr.force[0, 0] < 1e-300
+
+
+def test_a_step_that_lands_exactly_on_the_boundary():
+    # free mass at 1 m/s reaching the stop exactly at a grid point (t = 2^-10 = 16 dt)
+    sysm = nlbeam.System([[1e-2]], [[0.0]], [[0.0]], (nlbeam.Contact(0, "hertz", 1e8,
+                                                                      on_base=False),), "force")
+    dt = 2.0 ** -14
+    tr = nlbeam.integrate(sysm, nlbeam.Harmonic(0.0, 1.0), 2.0 ** -8, dt=dt,
+                          x0=[-2.0 ** -10, 1.0])
+    assert tr.n_impacts == 1
+    assert tr.events[0, 0] == 2.0 ** -10
+    assert tr.events[1, 3] == pytest.approx(-1.0, rel=1e-5)
