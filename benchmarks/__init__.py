@@ -1,0 +1,1 @@
+"""Benchmarks of nlbeam (not tests): `python -m benchmarks` regenerates BENCHMARKS.md."""
