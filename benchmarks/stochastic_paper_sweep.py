@@ -38,13 +38,13 @@ def psd_peaks(f, P, f_min=2.0, f_max=195.0, prominence=0.5):
 
 
 def run_level(args):
-    rms_m, linear, duration, seed, psd_resolution = args
+    rms_m, linear, duration, seed, psd_resolution, spc = args
     model = nlbeam.BeamImpact.paper(K_hertz=0.0) if linear else nlbeam.BeamImpact.paper()
     noise = st.BandLimitedNoise(BAND, rms=rms_m, seed=seed)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # reported through res.message
         res = st.simulate(model, noise, duration, transient=5.0, channels=("delta",),
-                          psd_resolution=psd_resolution)
+                          psd_resolution=psd_resolution, steps_per_contact=spc)
     f, P = res.psd("delta")
     df = f[1] - f[0]
     var_psd = float(np.sum(P) * df)
@@ -60,7 +60,7 @@ def run_level(args):
             "impacts_per_s": res.n_impacts / (res.duration + res.transient),
             "sim_per_wall": (res.duration + res.transient) / res.wall_time,
             "min_spc": res.min_steps_per_contact, "message": res.message, "dt": res.dt,
-            "wall": res.wall_time, "n_steps": res.n_steps}
+            "wall": res.wall_time, "n_steps": res.n_steps, "success": res.success}
 
 
 def main():
@@ -69,19 +69,21 @@ def main():
     ap.add_argument("--processes", type=int, default=2)
     ap.add_argument("--seed", type=int, default=2024)
     ap.add_argument("--psd-resolution", type=float, default=0.5, help="Hz")
+    ap.add_argument("--steps-per-contact", type=int, default=96,
+                    help="rk4 steps per contact (nlbeam default 32)")
     a = ap.parse_args()
     # compile once in this process before forking the pool
     st.simulate(nlbeam.BeamImpact.paper(), st.BandLimitedNoise(BAND, rms=1e-4, seed=1), 0.2,
                 transient=0.0)
-    jobs = [(lvl * 1e-3, False, a.duration, a.seed, a.psd_resolution) for lvl in LEVELS_MM]
-    jobs.append((1e-4, True, a.duration, a.seed, a.psd_resolution))
-    jobs.append((1e-4, False, a.duration, a.seed + 1, a.psd_resolution))  # a second seed
+    jobs = [(lvl * 1e-3, False, a.duration, a.seed, a.psd_resolution, a.steps_per_contact) for lvl in LEVELS_MM]
+    jobs.append((1e-4, True, a.duration, a.seed, a.psd_resolution, a.steps_per_contact))
+    jobs.append((1e-4, False, a.duration, a.seed + 1, a.psd_resolution, a.steps_per_contact))  # a second seed
     t = time.perf_counter()
     with ProcessPoolExecutor(max_workers=a.processes) as pool:
         rows = list(pool.map(run_level, jobs))
     wall = time.perf_counter() - t
     print(f"# stochastic_paper_sweep: paper model (law 2, e = 0.5), flat {BAND[0]:g}-{BAND[1]:g} Hz, "
-          f"rk4 dt = {rows[0]['dt']:.3g} s, transient 5 s + {a.duration:g} s per level, seed {a.seed}, "
+          f"rk4 dt = {rows[0]['dt']:.3g} s, {a.steps_per_contact} steps per contact, transient 5 s + {a.duration:g} s per level, seed {a.seed}, "
           f"PSD resolution {a.psd_resolution} Hz")
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"{a.processes} processes, total wall {wall:.0f} s")
@@ -93,6 +95,8 @@ def main():
         name = f"{r['rms_mm']:g}" + (" (linear)" if r["linear"] else "")
         if not r["linear"] and r is rows[-1]:
             name += f" (seed {a.seed + 1})"
+        if not r["success"]:
+            name += " FAILED"
         peaks = ", ".join(f"{p:.1f}" for p in r["peaks"])
         print(f"| {name} | {r['skewness']:.3f} +- {r['se_skewness']:.3f} | {r['kurtosis']:.3f} +- "
               f"{r['se_kurtosis']:.3f} | {r['std_over_rms']:.4f} | {r['mean_over_rms']:+.4f} | "

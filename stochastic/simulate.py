@@ -378,6 +378,7 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     n_impacts = n_steps = n_chunks = n_samples = 0
     min_spc = 0
     n_bad_onsets, t_bad_onset = 0, None
+    chunk_std, t_runaway = [], None
     k0 = 0
     while k0 < n_total:
         k1 = min(k0 + m, n_total)
@@ -410,6 +411,16 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
                     n_bad_onsets += int(np.sum(bad))
                     t1 = float(ee[np.argmax(bad), 0])
                     t_bad_onset = t1 if t_bad_onset is None else min(t_bad_onset, t1)
+        # runaway guard: a chunk whose largest excursion of x from its mean exceeds 50 times
+        # the median std of the chunks so far has gained energy numerically
+        xo = tr.x[:, model.output_dof]
+        if xo.size > 1:
+            sd = float(np.std(xo))
+            if len(chunk_std) >= 3 and t_runaway is None:
+                ref = float(np.median(chunk_std))
+                if not (np.max(np.abs(xo - np.mean(xo))) <= 50.0 * ref):
+                    t_runaway = t_a
+            chunk_std.append(sd)
         n_impacts += tr.n_impacts
         n_steps += tr.n_steps
         n_chunks += 1
@@ -473,6 +484,14 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
         res.message = "completed with warnings: " + "; ".join(msgs)
         for (w, n), text in zip(chunk_warnings.values(), msgs):
             warnings.warn(text, w.category, stacklevel=2)
+    if t_runaway is not None:
+        text = (f"the response ran away in the chunk starting at t = {t_runaway:.6g} s (an "
+                "excursion of x above 50 times the typical chunk std: energy gained numerically, "
+                "e.g. in a stiff contact); the statistics are unreliable; raise "
+                "steps_per_contact or reduce dt")
+        res.success = False
+        res.message = "failed: " + text + ("; " + res.message if res.message != "completed" else "")
+        warnings.warn(text, RuntimeWarning, stacklevel=2)
     if n_bad_onsets:
         # a contact onset with delta' <= 0 (a grazing re-entry just after a contact end) makes
         # the Lankarani-Nikravesh damping term change sign and feed energy in: the record is

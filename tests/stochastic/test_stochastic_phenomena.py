@@ -111,3 +111,23 @@ def test_an_onset_with_non_positive_rate_fails_the_result(monkeypatch):
         res = st.simulate(PAPER, nlbeam.Harmonic(1e-4, 40.0), 0.5, transient=0.0,
                           outputs=("moments",), chunk_duration=0.25)
     assert not res.success and res.message.startswith("failed")
+
+
+def test_a_runaway_response_fails_the_result(monkeypatch):
+    """If the integrator gains energy numerically (seen with a stiff low-velocity contact),
+    the excursion of x jumps far above its typical size: simulate marks the record failed."""
+    real = nlbeam.integrate
+    calls = []
+
+    def tampered(*args, **kwargs):
+        tr = real(*args, **kwargs)
+        calls.append(1)
+        if len(calls) == 6:
+            tr.x[tr.x.shape[0] // 2, 0] = 1.0  # a 1 m excursion in the sixth chunk
+        return tr
+
+    monkeypatch.setattr(nlbeam, "integrate", tampered)
+    with pytest.warns(RuntimeWarning, match="ran away"):
+        res = st.simulate(PAPER, nlbeam.Harmonic(1e-4, 40.0), 2.0, transient=0.0,
+                          outputs=("moments",), chunk_duration=0.25)
+    assert not res.success and "t = 1.25 s" in res.message
