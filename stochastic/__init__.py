@@ -1,7 +1,8 @@
 """Stochastic dynamics: Gaussian excitations synthesized block by block, streaming
 estimators (Welch PSD, histogram PDF, moments) and the simulation loop.
 
-Importing this package loads neither matplotlib nor h5py.
+Importing this package loads neither matplotlib nor h5py; figures are in `stochastic.plot`
+(imported on demand).
 """
 from .estimators import (StreamingHistogram, StreamingMoments, WelchPSD, correlation_from_psd,
                          welch_dof)
