@@ -77,7 +77,8 @@ _BH_DP5 = np.array([5179.0 / 57600.0, 0.0, 7571.0 / 16695.0, 393.0 / 640.0, -920
                     187.0 / 2100.0, 1.0 / 40.0])
 _C_DP5 = np.array([0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0])
 
-_T_C_HERTZ = 2.943275  # contact time of a free mass on a Hertz stop, in units d_max / v0
+_T_C_HERTZ = 2.943275
+VMINUS_FLOOR = 1e-6  # m/s: delta'_minus of a tangential (zero-rate) onset  # contact time of a free mass on a Hertz stop, in units d_max / v0
 
 
 # --- excitation ------------------------------------------------------------------------------
@@ -643,10 +644,49 @@ def _crossing(meth, t, h, s, s_new, f0, f1, P, dvm, disc, e, sysa, xc, xp, xtab,
                 phihi = dm
     if hi <= 0.0:
         return -1.0, 0
-    if phi0 > 0.0:
-        phi0 = 0.0
-    return locate(meth, t, 0.0, hi, phi0, phihi, s, P, dvm, disc, e, sign, 0.0, sysa, xc, xp, xtab,
+    lo = 0.0
+    if phi0 >= 0.0:
+        # the step starts on the boundary (just after an event, or at a record's start): a
+        # switch at tau = 0 only if delta moves to the new side; otherwise look for the next
+        # crossing beyond a first sub-step where delta is back on the old side
+        if sign * dd0 > 0.0:
+            return 0.0, 0
+        found = False
+        tl = 1e-6 * hi
+        for _ in range(6):
+            pl, st = delta_after(meth, t, tl, s, P, dvm, disc, e, sign, 0.0, sysa, xc, xp,
+                                 xtab, f0, s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w)
+            if pl < 0.0:
+                found = True
+                break
+            tl *= 10.0
+            if tl >= hi:
+                break
+        if not found:
+            return 0.0, 0   # tangential start onto the new side
+        lo = tl
+        phi0 = pl
+    return locate(meth, t, lo, hi, phi0, phihi, s, P, dvm, disc, e, sign, 0.0, sysa, xc, xp, xtab,
                   f0, s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w)
+
+
+@njit(cache=True)
+def contact_rate(t, s, disc, sysa, xc, xp, xtab):
+    """Largest rate (1/s) of the contact laws at (t, s): sqrt(stiffness / m_eff) and
+    damping / m_eff of every element in contact; explicit steps need rate * h < 0.5."""
+    etype = sysa[4]
+    N = s.shape[0] // 2
+    y, yd, ydd, st = excite(t, xc, xp, xtab)
+    lam = 0.0
+    for e in range(etype.shape[0]):
+        if disc[e, 0] != 0.0:
+            d, dd = kinematics(e, s, y, yd, sysa)
+            f, dfd, dfdd, dfdv = element_force(etype[e], sysa[8][e], d, dd, disc[e, 1], disc[e, 0])
+            winv = 0.0
+            for j in range(N):
+                winv += sysa[5][e, j] * sysa[9][e, j]
+            lam = max(lam, math.sqrt(max(dfd, 0.0) * winv), abs(dfdd) * winv)
+    return lam
 
 
 @njit(cache=True)
@@ -768,6 +808,17 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                 phase = 0
         if phase == 1 and n_in != 1:
             phase = 0
+        if phase != 0:
+            # a graded step longer than the stability limit of the contact law (a slow, stiff
+            # contact): fall back to time steps, which respect it
+            if phase == 1:
+                dt_est = (g_u + g_h) ** 2 - g_u ** 2
+            else:
+                y, yd, ydd, st = excite(t, xc, xp, xtab)
+                d, dd = kinematics(pe, s, y, yd, sysa)
+                dt_est = 2.0 * g_u * g_h / max(-dd, 1e-300)
+            if contact_rate(t, s, disc, sysa, xc, xp, xtab) * dt_est > 0.5:
+                phase = 0
         if phase == 1:
             # onset phase: uniform steps in sigma = sqrt(t - t_onset)
             hs = min(g_h, g_end - g_u)
@@ -829,6 +880,21 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                     t_new = t_new + tau
                     st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1,
                                KP[0], fel)
+                yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
+                d, dd = kinematics(pe, s_new, yv, ydv, sysa)
+                if d > 0.0 and dd < 0.0:
+                    # land on the far side (delta <= 0) of the boundary
+                    tau = -2.0 * d / dd
+                    for q in range(n):
+                        s_try[q] = s_new[q]
+                        if want_var:
+                            for c in range(m):
+                                dummyP[q, c] = P_new[q, c]
+                    st = rk_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var, sysa, xc,
+                                 xp, xtab, f1, s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+                    t_new = t_new + tau
+                    st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1,
+                               KP[0], fel)
                 ev = pe
                 tau_ev = t_new - t
                 landed = True
@@ -842,6 +908,10 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                     for e in range(ne):
                         if disc[e, 0] != 0.0 and dtc[e] < hc:
                             hc = dtc[e]
+                    # explicit stability: the law's stiffness and damping rates
+                    lam = contact_rate(t, s, disc, sysa, xc, xp, xtab)
+                    if lam * hc > 0.5:
+                        hc = 0.5 / lam
                     h = hc
                     if h >= t_end - t:
                         h = t_end - t
@@ -994,7 +1064,7 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                 max_land = abs(d)
             if disc[ev, 0] == 0.0:
                 disc[ev, 0] = 1.0
-                disc[ev, 1] = dd if dd > 0.0 else 1e-12
+                disc[ev, 1] = dd if dd > VMINUS_FLOOR else VMINUS_FLOOR
                 n_imp += 1
                 steps_in_contact[ev] = 0
                 d_sw[ev] = -1.0

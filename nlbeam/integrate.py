@@ -150,7 +150,8 @@ def _initial(model, x0, disc0, t0, excitation):
     if disc0 is None:
         disc = np.zeros((ne, 2))
         # a record that starts inside contact takes the penetration rate at the start as
-        # delta'_minus when it is positive (else the smallest positive value the law allows)
+        # delta'_minus when it is positive (else VMINUS_FLOOR = 1e-6 m/s, the floor the kernel
+        # also applies to a tangential onset)
         sysa = model.kernel_arrays()
         y, yd = excitation.evaluate([t0])
         for e in range(ne):
@@ -159,7 +160,7 @@ def _initial(model, x0, disc0, t0, excitation):
                 dd = sysa[5][e] @ s0[N:] + sysa[6][e] * yd[0]
                 if d > 0:
                     disc[e, 0] = 1.0
-                    disc[e, 1] = dd if dd > 0 else 1e-12
+                    disc[e, 1] = dd if dd > _k.VMINUS_FLOOR else _k.VMINUS_FLOOR
     else:
         disc = np.array(disc0, dtype=float).reshape(ne, 2)
     return s0, disc
