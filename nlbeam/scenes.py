@@ -715,10 +715,16 @@ def _figure(scene, d, variants, out_dir):
         lab = label or None
         if kind == "psd":
             f, P = sto.psd(ch)
+            fmax = d.get("f_max", s["band"][1])
             ax.semilogy(f[P > 0], P[P > 0], lw=0.8, label=lab)
             ax.set_xlabel("frequency [Hz]")
             ax.set_ylabel(f"PSD of {ch} [{_unit(ch)}$^2$/Hz]")
-            ax.set_xlim(0, d.get("f_max", s["band"][1]))
+            ax.set_xlim(0, fmax)
+            shown = P[(f <= fmax) & (P > 0)]
+            if shown.size:  # the band-edge roll-off would stretch the axis over decades
+                lo, hi = ax.get_ylim() if ax.lines[:-1] else (np.inf, 0.0)
+                ax.set_ylim(min(lo, max(shown.min(), shown.max() * 1e-7) / 2),
+                            max(hi, shown.max() * 3))
         elif kind == "excitation_psd":
             f, P = sto.psd("y")
             G = _noise(s).psd(f)
