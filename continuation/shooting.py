@@ -318,8 +318,11 @@ class ShootingProblem:
             raise ConvergenceError("settle: only for frequency continuation")
         model, A, f = self.setup(p)
         s0, _ = self.state_at_zero(u, p)
-        s = steady_state(model, A, p_new, x0=s0, efolds=efolds, min_periods=10,
-                         integrator=self.integrator)
+        try:
+            s = steady_state(model, A, p_new, x0=s0, efolds=efolds, min_periods=10,
+                             integrator=self.integrator)
+        except nlbeam.IntegrationError as exc:
+            raise ConvergenceError(f"settle: integration failed ({exc})") from None
         tmp = ShootingProblem(self.base_model, A, p_new, self.order, [0.0], self.integrator,
                               steps_per_period=self.steps_per_period)
         return self.transfer(tmp, s, p_new)
