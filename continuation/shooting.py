@@ -72,9 +72,9 @@ def clearance(model, states, y):
     idx = event_elements(model)
     if not idx:
         return np.full(states.shape[0], np.inf)
-    arr = model.kernel_arrays()  # (.., ew [5], ewy [6], egap [7], ..): delta = w.x + wy y - gap
+    _, w, wy, gap = model.element_geometry()  # delta = w.x + wy y - gap
     N = model.n_dof
-    d = states[:, :N] @ arr[5][idx].T + np.outer(np.atleast_1d(y), arr[6][idx]) - arr[7][idx]
+    d = states[:, :N] @ w[idx].T + np.outer(np.atleast_1d(y), wy[idx]) - gap[idx]
     return -np.max(d, axis=1)
 
 
@@ -179,9 +179,8 @@ class ShootingProblem:
                 if fl.dstate_dvminus0 is not None:
                     # started inside a contact: the memory was taken as the penetration rate
                     # at the start (nlbeam's rule), a function of the state: chain it in
-                    arr = model.kernel_arrays()
                     D = np.zeros((model.n_elements, self.N2))
-                    D[:, N:] = arr[5]
+                    D[:, N:] = model.element_geometry()[1]
                     M = M + fl.dstate_dvminus0 @ D
                 Ms.append(M)
         self.last_impacts = n_imp

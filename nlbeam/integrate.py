@@ -152,12 +152,12 @@ def _initial(model, x0, disc0, t0, excitation):
         # a record that starts inside contact takes the penetration rate at the start as
         # delta'_minus when it is positive (else VMINUS_FLOOR = 1e-6 m/s, the floor the kernel
         # also applies to a tangential onset)
-        sysa = model.kernel_arrays()
+        et, w, wy, gap = model.element_geometry()
         y, yd = excitation.evaluate([t0])
         for e in range(ne):
-            if _k.has_event(sysa[4][e]):
-                d = sysa[5][e] @ s0[:N] + sysa[6][e] * y[0] - sysa[7][e]
-                dd = sysa[5][e] @ s0[N:] + sysa[6][e] * yd[0]
+            if _k.has_event(et[e]):
+                d = w[e] @ s0[:N] + wy[e] * y[0] - gap[e]
+                dd = w[e] @ s0[N:] + wy[e] * yd[0]
                 if d > 0:
                     disc[e, 0] = 1.0
                     disc[e, 1] = dd if dd > _k.VMINUS_FLOOR else _k.VMINUS_FLOOR

@@ -268,6 +268,13 @@ class System:
         """The tuple of arrays the compiled kernels take (see ``nlbeam._kernels``)."""
         return self._arrays
 
+    def element_geometry(self):
+        """(etype, w, wy, gap) of the elements: the law codes and the penetration geometry
+        delta = w . x + wy * y - gap (w shape (n_elements, n_dof); m). Python-side code reads the
+        geometry here; ``kernel_arrays`` is the kernels' private layout."""
+        a = self._arrays
+        return a[4], a[5], a[6], a[7]
+
     def kernels(self):
         """The compiled kernel module for this system (a private copy with a custom force)."""
         from .custom import kernels_for
@@ -279,19 +286,19 @@ class System:
         return np.sort(np.sqrt(np.abs(lam.real))) / (2 * np.pi)
 
     def has_events(self) -> bool:
-        return any(_k.has_event(t) for t in self._arrays[4])
+        return any(_k.has_event(t) for t in self.element_geometry()[0])
 
     @property
     def contact_elements(self) -> np.ndarray:
         """Indices of the elements with contact events (the stops)."""
-        return np.flatnonzero([_k.has_event(t) for t in self._arrays[4]])
+        return np.flatnonzero([_k.has_event(t) for t in self.element_geometry()[0]])
 
     def penetration(self, state, y=0.0, yd=0.0):
         """(delta, delta') of every element (m, m/s) at ``state`` [x, v] (shape (..., 2N)) and
         excitation (y, y'); positive delta is inside the stop."""
         state = np.asarray(state, dtype=float)
         N = self.n_dof
-        ew, ewy, egap = self._arrays[5], self._arrays[6], self._arrays[7]
+        _, ew, ewy, egap = self.element_geometry()
         d = state[..., :N] @ ew.T + np.multiply.outer(np.asarray(y, dtype=float), ewy) - egap
         dd = state[..., N:] @ ew.T + np.multiply.outer(np.asarray(yd, dtype=float), ewy)
         return d, dd
@@ -311,6 +318,7 @@ def _model_protocol(cls):
         setattr(cls, name, property(lambda self, _n=name: getattr(self.system, _n)))
     cls.kernel_arrays = lambda self: self.system.kernel_arrays()
     cls.kernels = lambda self: self.system.kernels()
+    cls.element_geometry = lambda self: self.system.element_geometry()
     cls.natural_frequencies = lambda self: self.system.natural_frequencies()
     cls.has_events = lambda self: self.system.has_events()
     cls.contact_elements = property(lambda self: self.system.contact_elements)
