@@ -738,11 +738,15 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
     f1 = np.zeros(n)
     dummyP = np.zeros((n, m))
     steps_in_contact = np.zeros(ne, dtype=np.int64)
+    # a contact under way at t0 started before this call: its steps here are not all of its
+    # steps, so it does not enter the steps-per-contact count
+    from_before = np.zeros(ne, dtype=np.bool_)
     dtc = np.full(ne, np.inf)
     d_sw = np.full(ne, -1.0)     # delta at which the graded exit phase starts (-1: unknown)
     y, yd, ydd, st = excite(t0, xc, xp, xtab)
     for e in range(ne):
         if disc[e, 0] != 0.0:
+            from_before[e] = True
             # a record that starts inside a contact: the impact velocity with the same energy
             d, dd = kinematics(e, s, y, yd, sysa)
             winv = 0.0
@@ -1099,9 +1103,12 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                     phase = 0
             else:
                 disc[ev, 0] = 0.0
-                n_contacts += 1
-                if steps_in_contact[ev] < min_spc:
-                    min_spc = steps_in_contact[ev]
+                if from_before[ev]:
+                    from_before[ev] = False
+                else:
+                    n_contacts += 1
+                    if steps_in_contact[ev] < min_spc:
+                        min_spc = steps_in_contact[ev]
                 dtc[ev] = np.inf
                 d_sw[ev] = -1.0
                 phase = 0

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import nlbeam
+from nlbeam.integrate import MIN_STEPS_PER_CONTACT
 
 F40 = nlbeam.Harmonic(1e-4, 40.0)
 
@@ -161,3 +162,27 @@ def test_a_record_starting_exactly_on_the_stop():
     y, yd = ex.evaluate([0.0])
     tr = nlbeam.integrate(nlbeam.BeamImpact.paper(), ex, 0.5, x0=[y[0], yd[0]], max_steps=10**6)
     assert tr.n_impacts > 5 and np.all(np.isfinite(tr.state_end))
+
+
+@pytest.mark.parametrize("method", ["rk4", "adaptive"])
+def test_a_record_split_inside_a_contact_counts_no_short_contact(method):
+    # chunked records (stochastic.simulate) restart inside contacts: the remainder of a contact
+    # that began before t0 is not a contact resolved with too few steps, and the two halves
+    # continue the single run
+    model = nlbeam.BeamImpact.paper()
+    whole = nlbeam.integrate(model, F40, 0.2, method=method, event_log=100, store_every=0)
+    ev = whole.events[:whole.n_events]
+    on = ev[ev[:, 2] == 1, 0]
+    off = ev[ev[:, 2] == 0, 0]
+    t_off = off[off > on[2]][0]
+    t_split = t_off - 1e-3 * (t_off - on[2])  # just before the end of the third contact
+    a = nlbeam.integrate(model, F40, t_split, method=method, store_every=0)
+    assert a.disc_end[0, 0] == 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        b = nlbeam.integrate(model, F40, 0.2, method=method, t0=t_split, x0=a.state_end,
+                             disc0=a.disc_end, store_every=0)
+    if method == "rk4":
+        assert b.min_steps_per_contact >= MIN_STEPS_PER_CONTACT
+    assert a.n_impacts + b.n_impacts == whole.n_impacts
+    assert np.max(np.abs(b.state_end - whole.state_end) / np.array([1e-4, 1e-4 * 2 * math.pi * 40])) < 1e-4
