@@ -862,6 +862,15 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
             if st != 0 or t_new > t_end or t_new <= t:
                 phase = 0  # the record ends inside the exit phase (or it failed): time steps
                 continue
+            # the step in u is only valid while delta falls monotonically: if delta' reached 0
+            # inside it (a slow contact held by the base), the state no longer has delta =
+            # u^2 and delta' < 0; retake the step in time
+            yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
+            d, dd = kinematics(pe, s_new, yv, ydv, sysa)
+            u_new = g_u - hu
+            if not (dd < 0.0 and abs(d - u_new * u_new) <= 0.05 * (g_u * g_u - u_new * u_new)):
+                phase = 0
+                continue
             g_u -= hu
             st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
             n_rhs += 1

@@ -157,6 +157,25 @@ def test_no_onset_with_a_negative_rate_after_a_grazing_exit():
     assert np.all(np.diff(ev[:, 2]) != 0) and np.all(np.diff(ev[:, 0]) > 0)
 
 
+def test_a_contact_held_by_the_base_is_not_left_by_the_graded_exit():
+    # a slow contact (onset 0.054 m/s) falls through a quarter of its depth, then the base
+    # holds it in: the exit phase's steps in u = sqrt(delta) were continued through
+    # delta' = 0, delta went to -9e-5 m inside the "contact", the exit came 0.6 ms late at
+    # -0.113 m/s and the next compression carried the old delta'_minus (force 281 N vs 12.8 N)
+    ex = _noise(1e-4, 2026).sampled(23.82, t_start=23.811)
+    kw = dict(t0=23.811, x0=[-5.234997309412435e-05, 0.1429478013162771],
+              disc0=[[0.0, 0.23541315235426458]], event_log=10, store_every=1)
+    model = nlbeam.BeamImpact.paper()
+    a = nlbeam.integrate(model, ex, 23.816, dt=5e-5, **kw)
+    b = nlbeam.integrate(model, ex, 23.816, method="adaptive", rtol=1e-10, atol=1e-14, dt=5e-5, **kw)
+    assert a.n_events == b.n_events == 2
+    assert a.events[1, 0] == pytest.approx(b.events[1, 0], abs=1e-7)
+    assert a.events[1, 3] == pytest.approx(b.events[1, 3], rel=1e-3)
+    assert np.max(a.force) == pytest.approx(np.max(b.force), rel=1e-3)
+    in_contact = (a.t > a.events[0, 0]) & (a.t < a.events[1, 0])
+    assert np.all(a.delta[in_contact, 0] > 0)
+
+
 def test_a_record_starting_exactly_on_the_stop():
     ex = _noise(1e-4, 8).sampled(0.5)
     y, yd = ex.evaluate([0.0])
