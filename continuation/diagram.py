@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 import time
 from dataclasses import dataclass, field
 
@@ -94,14 +93,13 @@ class FrequencyResponse:
     version: str = nlbeam.__version__
 
     def save(self, path):
-        """Write to HDF5 (atomically: a temporary file in the same folder, then os.replace)."""
+        """Write to HDF5 (atomically: a temporary file in the same folder, then os.replace;
+        the usual file mode under the umask)."""
         import h5py
 
-        path = os.fspath(path)
-        d = os.path.dirname(os.path.abspath(path))
-        fd, tmp = tempfile.mkstemp(suffix=".h5.tmp", dir=d)
-        os.close(fd)
-        try:
+        from nlbeam.io import atomic_path
+
+        with atomic_path(path, suffix=".h5") as tmp:  # removed (and re-raised) on failure
             with h5py.File(tmp, "w") as h:
                 h.attrs["version"] = self.version
                 h.attrs["amplitude"] = self.amplitude
@@ -144,11 +142,6 @@ class FrequencyResponse:
                 for name in ("frequency", "xmax", "harmonic", "branch", "ratio", "tolerance"):
                     gs.create_dataset(name, data=np.array([getattr(s, name) for s in
                                                            self.superharmonics], dtype=float))
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.remove(tmp)
-            raise
 
 
 def load(path):

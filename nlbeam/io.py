@@ -1,4 +1,5 @@
-"""Small file helpers of the top layer: atomic writes and content keys.
+"""Small file helpers: atomic writes and content keys (standard library only, so every layer
+may use them: the analyses' save functions, scenes, the command line).
 
 Every output file is written to a temporary name in its own folder and renamed over the
 target (``os.replace``), so a reader never sees half a file and a failure leaves none.
@@ -10,7 +11,7 @@ import hashlib
 import json
 import math
 import os
-import tempfile
+import secrets
 
 __all__ = ["atomic_path", "write_text_atomic", "canonical_json", "content_key"]
 
@@ -18,16 +19,23 @@ __all__ = ["atomic_path", "write_text_atomic", "canonical_json", "content_key"]
 @contextlib.contextmanager
 def atomic_path(path, suffix=""):
     """Yield a temporary path beside ``path``; on success rename it to ``path``, on any
-    exception remove it. ``suffix`` helps writers that look at the extension (matplotlib)."""
+    exception remove it (and re-raise). ``suffix`` helps writers that look at the extension
+    (matplotlib). The temporary file is created with mode 0666 minus the umask, like any
+    new file (``tempfile.mkstemp`` would make it 0600, and the rename would keep that)."""
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     os.makedirs(folder, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=suffix or os.path.splitext(path)[1],
-                               dir=folder)
-    os.close(fd)
-    mask = os.umask(0o022)
-    os.umask(mask)
-    os.chmod(tmp, 0o666 & ~mask)  # mkstemp makes 0600; give the file the usual mode
+    suffix = suffix or os.path.splitext(path)[1]
+    for _ in range(100):
+        tmp = os.path.join(folder, f".tmp-{secrets.token_hex(6)}{suffix}")
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        except FileExistsError:
+            continue
+        os.close(fd)
+        break
+    else:  # pragma: no cover - 100 collisions of 48 random bits
+        raise FileExistsError(f"{path}: no free temporary name in {folder}")
     try:
         yield tmp
         os.replace(tmp, path)

@@ -11,7 +11,6 @@ import math
 import os
 import re
 import sys
-import tempfile
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -169,14 +168,13 @@ class StochasticResult:
 
     # -- files ------------------------------------------------------------------------
     def save(self, path):
-        """Write to HDF5 (temporary file in the same directory, then renamed)."""
+        """Write to HDF5 (temporary file in the same directory, then renamed; the usual
+        file mode under the umask)."""
         import h5py
 
-        path = os.fspath(path)
-        d = os.path.dirname(os.path.abspath(path))
-        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".h5", dir=d)
-        os.close(fd)
-        try:
+        from nlbeam.io import atomic_path
+
+        with atomic_path(path, suffix=".h5") as tmp:  # temporary name, then renamed
             with h5py.File(tmp, "w") as f:
                 meta = {"format": _FORMAT, "channels": ",".join(self.channels),
                         "outputs": ",".join(self.outputs), "fs": self.fs, "dt": self.dt,
@@ -208,11 +206,6 @@ class StochasticResult:
                     g = f.create_group("history")
                     for k, v in self.history.items():
                         g.create_dataset(k, data=v)
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.remove(tmp)
-            raise
         return path
 
 
