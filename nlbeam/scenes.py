@@ -155,10 +155,14 @@ def _file(exts):
     return check
 
 
-MODEL_KEYS = {"name": _choice(("BeamImpact",)), "m": _real(0, lo_open=True, unit="kg"),
+MODEL_KEYS = {"name": _choice(("BeamImpact", "ModalBeam")), "m": _real(0, lo_open=True, unit="kg"),
               "k": _real(0, unit="N/m"), "b": _real(0, unit="kg/s"),
               "K_hertz": _real(0, unit="N/m^1.5"), "e": _real(0, 1, lo_open=True),
-              "contact": _choice(CONTACTS), "mu": _real(0, unit="N s/m^2.5"), "clamp": _bool}
+              "contact": _choice(CONTACTS), "mu": _real(0, unit="N s/m^2.5"), "clamp": _bool,
+              # name = "ModalBeam": ModalBeam.paper(...) (docs/modal_beam.md), m, k, b not taken
+              "n_modes": _int(1, 20), "bc": _choice(("clamped-free", "clamped-clamped")),
+              "stop_ratio": _real(0, 1, lo_open=True), "zeta": _real(0), "gap": _real(unit="m")}
+MODAL_KEYS = ("n_modes", "bc", "stop_ratio", "zeta", "gap")
 PERIODIC_KEYS = {"amplitude": _real(0, lo_open=True, unit="m"),
                  "f_range": _pair(0.0, strict_lo=True), "orders": _int_list(1, 8),
                  "n_grid": _int(3, 2000), "segments": _int(1, 64),
@@ -316,7 +320,8 @@ def load_scene(path) -> Scene:
     if not isinstance(title, str):
         fail(("title",), "must be a string", title)
     model = section("model", MODEL_KEYS, doc.get("model", {}), ("model",))
-    model.pop("name", None)
+    if model.get("name") != "ModalBeam":
+        model.pop("name", None)
     periodic = stoch = None
     if "periodic" in doc:
         periodic = dict(PERIODIC_DEFAULTS)
@@ -406,7 +411,16 @@ def load_scene(path) -> Scene:
 def _model(spec):
     import nlbeam
 
-    return nlbeam.BeamImpact(**spec)
+    kw = {k: v for k, v in spec.items() if k != "name"}
+    if spec.get("name") == "ModalBeam":
+        for k in ("m", "k", "b"):
+            if k in kw:
+                raise ValueError(f"{k}: not a parameter of ModalBeam (calibrated to m, k, b)")
+        return nlbeam.ModalBeam.paper(**kw)
+    for k in MODAL_KEYS:
+        if k in kw:
+            raise ValueError(f"{k}: a ModalBeam parameter (set name = 'ModalBeam')")
+    return nlbeam.BeamImpact(**kw)
 
 
 def _noise(s):
