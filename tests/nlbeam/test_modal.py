@@ -1,5 +1,6 @@
 """ModalBeam: a multi-mode Euler-Bernoulli beam with an elastic stop (nlbeam.modal)."""
 import math
+import os
 
 import numpy as np
 import pytest
@@ -182,3 +183,22 @@ def test_works_with_stochastic_and_continuation():
 def test_bad_input_names_the_parameter(kw, name):
     with pytest.raises(ValueError, match=f"^{name}"):
         ModalBeam(**kw)
+
+
+def test_scene_names_the_modal_beam(tmp_path):
+    from nlbeam.scenes import SceneError, _model, load_scene, run_scene
+
+    sc = load_scene(os.path.join(os.path.dirname(__file__), "..", "..", "figures", "modal_beam.toml"))
+    m = _model(sc.model)
+    assert isinstance(m, ModalBeam) and m.n_modes == 4
+    p = tmp_path / "s.toml"
+    p.write_text('[model]\nname = "ModalBeam"\nn_modes = 2\n[stochastic]\nduration = 1.0\n'
+                 'transient = 0.2\nrms = 1e-4\npsd_resolution = 2.0\n[[figure]]\nkind = "psd"\nfile = "p.png"\n')
+    run_scene(p, tmp_path / "out")
+    assert (tmp_path / "out" / "p.png").exists()
+    for text, key in (('[model]\nname = "ModalBeam"\nm = 0.1\n', "model.m"),
+                      ('[model]\nn_modes = 2\n', "model.n_modes"),
+                      ('[model]\nname = "ModalBeam"\nn_modes = 0\n', "model.n_modes")):
+        p.write_text(text)
+        with pytest.raises(SceneError, match=key):
+            load_scene(p)
