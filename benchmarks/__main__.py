@@ -59,7 +59,9 @@ def main(argv=None):
                ("Stochastic: work-precision against scipy", "stochastic_work_precision.py",
                 ("--no-rss",) if args.quick else ()),
                ("Continuation: the paper model's diagram and its convergence",
-                "continuation_diagram.py", ("--quick",) if args.quick else ())]
+                "continuation_diagram.py", ("--quick",) if args.quick else ()),
+               ("Modal beam: cost and convergence against the number of modes",
+                "modal_scaling.py", ("--quick",) if args.quick else ())]
     for title, script, extra in studies:
         if not (HERE / script).exists():
             continue
