@@ -255,7 +255,7 @@ def _default_resolution(duration):
 
 
 def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, channels=("delta",),
-             method="rk4", dt=None, rtol=1e-8, atol=1e-12, seed=None, psd_resolution=None,
+             method="adaptive", dt=None, rtol=1e-8, atol=1e-12, seed=None, psd_resolution=None,
              keep_history=None, *, x0=None, store_every=1, steps_per_contact=None,
              chunk_duration=None, pdf_bins=200, pdf_edges=None, batch_duration=None,
              progress=None) -> StochasticResult:
@@ -270,7 +270,11 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     channels: "x", "v" (output DOF, or "x[i]"), "y", "yd", "delta", "force" ("delta[e]").
     method, dt, rtol, atol, steps_per_contact, x0: as ``nlbeam.integrate``; the samples are
     every ``store_every`` steps of ``dt`` (sampling frequency fs = 1/(dt store_every));
-    the band of a noise must lie below fs/2 (checked).
+    the band of a noise must lie below fs/2 (checked). The default, adaptive DP5 at rtol
+    1e-8 / atol 1e-12 m with samples every dt = 1/(32 f_max) (6.4 kHz for a 200 Hz band), gives
+    a max|x| error of ~5e-7 of the record's max|x| on the paper's beam (2 s, 95 impacts, against
+    a DOP853 rtol 1e-13 reference; benchmarks/stochastic_work_precision.py) at ~0.4 the CPU of
+    rk4 with dt = 5e-5 s and 32 steps per contact, whose error there is 5.6e-4.
     psd_resolution: Welch bin spacing (Hz), default max(0.05, 16/duration).
     keep_history: (t0, t1) s, keep the samples in that window (memory ~ its length).
     chunk_duration: s per call to the integrator (default: the noise's block or 1 s).
