@@ -26,18 +26,39 @@ the folds located on it. The point's ``stable`` is the branch's stability there.
 ``(frequencies, G)`` pair of arrays (G > 0), a ``nlbeam.Harmonic`` (its frequency), or None
 (everything). A frequency is held when the band meets ``[f - tol, f + tol]``.
 
-*Kinds*, tried in this order, the closest point within tolerance of the first kind that has
-one wins (the others are kept in ``alternatives``):
+*Kinds.* The peaks are explained strongest first (largest P), each by the first of these
+steps that succeeds; within a step the closest point within tolerance wins (others within
+tolerance are kept in ``alternatives``). ``note`` says which step explained the peak.
 
-1. ``"harmonic"`` (order 1): the excitation holds ``f`` and an order-1 branch resonates at
-   excitation frequency ``f``.
-2. ``"subharmonic"`` (order n >= 2): the excitation holds ``n f`` and an order-n branch
-   resonates at excitation frequency ``n f`` (response at ``f = f_exc / n``).
-3. ``"superharmonic"`` (order k >= 2): the excitation holds ``f / k`` and the harmonic branch
-   has a superharmonic resonance of order k at ``f / k``: a diagram ``Superharmonic`` mark
-   with ``harmonic = k``, or an order-1 resonance at ``f_s`` other than the main one (the
-   order-1 resonance of largest xmax, at ``f_r``) with ``k = round(f_r / f_s) >= 2`` and
-   ``|k f_s - f_r| <= 0.15 f_r``. Response at ``k f_s``.
+1. A resonance (``note = "resonance"``), trying the kinds in this order:
+
+   a. ``"harmonic"`` (order 1): the excitation holds ``f`` and an order-1 branch resonates
+      at excitation frequency ``f`` (the linear or the impacting resonance alike: under
+      broad-band noise the harmonic resonance peak lies inside the band).
+   b. ``"subharmonic"`` (order n >= 2): the excitation holds ``n f`` and an order-n branch
+      resonates at excitation frequency ``n f`` (response at ``f = f_exc / n``).
+   c. ``"superharmonic"`` (order k >= 2): the excitation holds ``f / k`` and the harmonic
+      branch has a superharmonic resonance of order k at ``f / k``: a diagram
+      ``Superharmonic`` mark with ``harmonic = k``, or an order-1 resonance at ``f_s`` other
+      than the main one (the order-1 resonance of largest xmax, at ``f_r``) with
+      ``k = round(f_r / f_s) >= 2`` and ``|k f_s - f_r| <= 0.15 f_r``. Response at ``k f_s``.
+
+2. A multiple of a stronger peak (``note = "multiple"``): ``f`` lies within tolerance of
+   ``k f_p`` (k >= 2) where ``f_p`` is a stronger peak explained in step 1 or 3. The impact
+   makes the response to each excitation component strongly non-harmonic, so every peak
+   comes with its integer multiples (e.g. 2 and 3 x 43.5 Hz under broad-band noise; 3/2 and
+   2 times the excitation of a 1/2 subharmonic are 3 and 4 x its response peak). Kind
+   ``"superharmonic"``, order ``k``, ``explained_by = f_p``; ``branch_frequency``,
+   ``stable``, ``branch`` and ``xmax`` are those of the parent's diagram point. Of several
+   parents the strongest wins.
+3. Forced response inside a narrow band (``note = "forced"``): the excitation holds ``f``
+   and the band holding it is at most ``background_hz`` wide (a narrow band, or a
+   ``Harmonic``: the input itself stands out of the running median there, so the response
+   to it makes a peak even away from any resonance). Kind ``"harmonic"``, order 1: the
+   response at the excitation frequency is the order-1 response; the diagram point is the
+   order-1 branch point closest to ``f`` (within tolerance; else none). A peak inside a
+   *broad* band away from every resonance is not forced (a flat input through a
+   non-resonant transfer makes no peak): it stays ``"unexplained"``.
 4. ``"asymmetry"`` (order 0): ``f <= asymmetry_below`` (default a third of the main
    harmonic resonance frequency) and the excitation holds two frequencies ``f`` apart
    (its band is at least ``f`` wide): the difference-frequency (low-frequency) content of
@@ -45,7 +66,9 @@ one wins (the others are kept in ``alternatives``):
 5. ``"unexplained"`` (order 0): none of the above (e.g. a second beam mode the model lacks).
 
 ``branch_frequency`` is the excitation frequency of the explaining diagram point (the
-abscissa of the paper's Figure 4); NaN for the last two kinds.
+abscissa of the paper's Figure 4); NaN for the last two kinds and when no diagram point
+explains it. ``response_frequency`` is where the explanation puts the peak (Hz; for a
+multiple ``k f_p``), ``distance = |frequency - response_frequency|``.
 """
 from __future__ import annotations
 
@@ -81,11 +104,15 @@ class PeakMatch:
     """One PSD peak and its explanation (see the module doc for the rule).
 
     frequency: peak (Hz); prominence: decades above the local background; psd: P at the
-    peak; kind: one of KINDS; order: n of a 1/n subharmonic, k of a superharmonic, 1 for
-    harmonic, 0 otherwise; branch_frequency: excitation frequency of the explaining point
-    (Hz, NaN if none); stable: its stability (None if none); distance: Hz between the peak
-    and the point's response frequency (NaN if none); tolerance (Hz); branch: index in
-    ``frc.branches`` (-1 if none); alternatives: other explanations within tolerance."""
+    peak; kind: one of KINDS; order: n of a 1/n subharmonic, k of a superharmonic (or of a
+    multiple of a stronger peak), 1 for harmonic, 0 otherwise; branch_frequency: excitation
+    frequency of the explaining diagram point (Hz, NaN if none); stable: its stability
+    (None if none); distance: Hz between the peak and response_frequency (NaN if none);
+    tolerance (Hz); branch: index in ``frc.branches`` (-1 if none); xmax: the point's
+    (m); note: "resonance", "multiple" or "forced" (the step that explained the peak, ""
+    for asymmetry and unexplained); explained_by: the parent peak of a multiple (Hz, NaN
+    otherwise); response_frequency: where the explanation puts the peak (Hz, NaN if none);
+    alternatives: other explanations within tolerance."""
 
     frequency: float
     prominence: float
@@ -98,6 +125,9 @@ class PeakMatch:
     psd: float = math.nan
     branch: int = -1
     xmax: float = math.nan
+    note: str = ""
+    explained_by: float = math.nan
+    response_frequency: float = math.nan
     alternatives: tuple = field(default=(), compare=False)
 
     def as_row(self) -> dict:
@@ -107,7 +137,8 @@ class PeakMatch:
                 "branch_frequency_hz": self.branch_frequency,
                 "stable": "" if self.stable is None else bool(self.stable),
                 "distance_hz": self.distance, "tolerance_hz": self.tolerance,
-                "xmax_m": self.xmax}
+                "xmax_m": self.xmax, "note": self.note,
+                "explained_by_hz": self.explained_by}
 
 
 # -- peaks of the PSD ----------------------------------------------------------------------
@@ -251,21 +282,40 @@ class _Holds:
             return True
         return any(lo - tol <= f <= hi + tol for lo, hi in self.bands)
 
+    def width_at(self, f, tol):
+        """Width (Hz) of the narrowest band holding ``f``; inf for 'everything', None if
+        nothing holds it."""
+        if self.bands is None:
+            return math.inf
+        w = [hi - lo for lo, hi in self.bands if lo - tol <= f <= hi + tol]
+        return min(w) if w else None
+
 
 # -- the mapping ---------------------------------------------------------------------------
 def map_peaks(psd, frc, excitation=None, *, min_prominence=0.3, background_hz=20.0,
               tol_bins=2.0, tolerance=None, asymmetry_below=None, f_range=None,
-              max_superharmonic=5):
+              max_superharmonic=5, max_multiple=8):
     """Find the peaks of a response PSD ``psd = (f, P)`` and explain each by the periodic
     diagram ``frc`` (a ``continuation.FrequencyResponse``, or any object with ``branches``
     (order, frequency, xmax, stable), ``bifurcations`` (kind, frequency, xmax, order,
     branch) and ``superharmonics``). Returns a list of :class:`PeakMatch`, by frequency.
-    The rule, tolerances and defaults are in the module doc; ``f_range`` (Hz) limits the
-    peaks considered."""
+    The rule, tolerances and defaults are in the module doc; ``f_range`` (Hz, a pair lo <
+    hi) limits the peaks considered; ``max_multiple``: the largest k of a multiple of a
+    stronger peak."""
     if tolerance is not None:
         tolerance = float(tolerance)
         if not (math.isfinite(tolerance) and tolerance > 0):
             raise ValueError(f"tolerance: must be finite and > 0 Hz, got {tolerance!r}")
+    if f_range is not None:
+        try:
+            lo, hi = (float(v) for v in f_range)
+        except (TypeError, ValueError):
+            raise ValueError(f"f_range: must be a pair (lo, hi) of Hz, got {f_range!r}") from None
+        if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
+            raise ValueError(f"f_range: must satisfy 0 <= lo < hi (Hz), got {f_range!r}")
+        f_range = (lo, hi)
+    if isinstance(max_multiple, bool) or not isinstance(max_multiple, int) or max_multiple < 1:
+        raise ValueError(f"max_multiple: must be an integer >= 1, got {max_multiple!r}")
     f = np.asarray(psd[0], dtype=float)
     P = np.asarray(psd[1], dtype=float)
     idx, prom, halfw, _ = find_peaks((f, P), min_prominence=min_prominence,
@@ -279,37 +329,105 @@ def map_peaks(psd, frc, excitation=None, *, min_prominence=0.3, background_hz=20
         main = max(harm, key=lambda r: r.xmax) if harm else (min(res, key=lambda r: r.response)
                                                              if res else None)
         asymmetry_below = main.response / 3.0 if main is not None else 0.0
-    out = []
+    peaks = []
     for i, pr, hw in zip(idx, prom, halfw):
-        fp = float(f[i])
         tol = tolerance if tolerance is not None else max(tol_bins * df, float(hw))
-        cands = []
-        for r in res:
-            d = abs(r.response - fp)
-            if d > tol:
-                continue
-            if r.kind == "harmonic" and not holds(fp, tol):
-                continue
-            if r.kind == "subharmonic" and not holds(r.order * fp, r.order * tol):
-                continue
-            if r.kind == "superharmonic" and not holds(fp / r.order, tol / r.order):
-                continue
-            cands.append((KINDS.index(r.kind), d, r))
-        cands.sort(key=lambda c: (c[0], c[1]))
-        common = dict(frequency=fp, prominence=float(pr), tolerance=float(tol), psd=float(P[i]))
-        if cands:
-            _, d, r = cands[0]
-            alts = tuple((c[2].kind, c[2].order, c[2].frequency, c[1]) for c in cands[1:])
-            out.append(PeakMatch(kind=r.kind, order=r.order, branch_frequency=r.frequency,
-                                 stable=r.stable, distance=float(d), branch=r.branch,
-                                 xmax=r.xmax, alternatives=alts, **common))
-        elif fp <= asymmetry_below and holds.width >= fp - tol:
-            out.append(PeakMatch(kind="asymmetry", order=0, branch_frequency=math.nan,
-                                 stable=None, distance=math.nan, **common))
-        else:
-            out.append(PeakMatch(kind="unexplained", order=0, branch_frequency=math.nan,
-                                 stable=None, distance=math.nan, **common))
-    return out
+        peaks.append(dict(frequency=float(f[i]), prominence=float(pr), tolerance=float(tol),
+                          psd=float(P[i])))
+    explained = []  # (PeakMatch) of steps 1 and 3: the parents of multiples
+    out = []
+    for pk in sorted(peaks, key=lambda p: -p["psd"]):  # strongest first
+        m = (_resonance_match(pk, res, holds)
+             or _multiple_match(pk, explained, max_multiple)
+             or _forced_match(pk, frc, holds, background_hz))
+        if m is None:
+            fp, tol = pk["frequency"], pk["tolerance"]
+            kind = "asymmetry" if fp <= asymmetry_below and holds.width >= fp - tol \
+                else "unexplained"
+            m = PeakMatch(kind=kind, order=0, branch_frequency=math.nan, stable=None,
+                          distance=math.nan, **pk)
+        elif m.note in ("resonance", "forced"):
+            explained.append(m)
+        out.append(m)
+    return sorted(out, key=lambda m: m.frequency)
+
+
+def _resonance_match(pk, res, holds):
+    """Step 1 of the rule: the closest resonance of the first kind that explains the peak."""
+    fp, tol = pk["frequency"], pk["tolerance"]
+    cands = []
+    for r in res:
+        d = abs(r.response - fp)
+        if d > tol:
+            continue
+        if r.kind == "harmonic" and not holds(fp, tol):
+            continue
+        if r.kind == "subharmonic" and not holds(r.order * fp, r.order * tol):
+            continue
+        if r.kind == "superharmonic" and not holds(fp / r.order, tol / r.order):
+            continue
+        cands.append((KINDS.index(r.kind), d, r))
+    if not cands:
+        return None
+    cands.sort(key=lambda c: (c[0], c[1]))
+    _, d, r = cands[0]
+    alts = tuple((c[2].kind, c[2].order, c[2].frequency, c[1]) for c in cands[1:])
+    return PeakMatch(kind=r.kind, order=r.order, branch_frequency=r.frequency, stable=r.stable,
+                     distance=float(d), branch=r.branch, xmax=r.xmax, note="resonance",
+                     response_frequency=r.response, alternatives=alts, **pk)
+
+
+def _multiple_match(pk, parents, max_multiple):
+    """Step 2: k times a stronger explained peak (the strongest such parent)."""
+    fp, tol = pk["frequency"], pk["tolerance"]
+    cands = []
+    for q in parents:
+        if not (q.psd > pk["psd"] and q.frequency > 0):
+            continue
+        k = int(round(fp / q.frequency))
+        if not 2 <= k <= max_multiple:
+            continue
+        d = abs(fp - k * q.frequency)
+        if d <= tol:
+            cands.append((-q.psd, d, k, q))
+    if not cands:
+        return None
+    cands.sort(key=lambda c: (c[0], c[1]))
+    _, d, k, q = cands[0]
+    alts = tuple(("superharmonic", c[2], c[3].frequency, c[1]) for c in cands[1:])
+    return PeakMatch(kind="superharmonic", order=k, branch_frequency=q.branch_frequency,
+                     stable=q.stable, distance=float(d), branch=q.branch, xmax=q.xmax,
+                     note="multiple", explained_by=q.frequency,
+                     response_frequency=k * q.frequency, alternatives=alts, **pk)
+
+
+def _forced_match(pk, frc, holds, background_hz):
+    """Step 3: inside a band no wider than the background window: the order-1 response."""
+    fp, tol = pk["frequency"], pk["tolerance"]
+    w = holds.width_at(fp, tol)
+    if w is None or w > background_hz:
+        return None
+    best = None
+    for bi, b in enumerate(frc.branches):
+        if int(b.order) != 1:
+            continue
+        fr = np.asarray(b.frequency, dtype=float)
+        if fr.size == 0:
+            continue
+        i = int(np.argmin(np.abs(fr - fp)))
+        d = abs(float(fr[i]) - fp)
+        st = bool(np.asarray(b.stable)[i])
+        if d <= tol and (best is None or (d, not st) < (best[0], not best[3])):
+            best = (d, bi, i, st)
+    if best is None:
+        return PeakMatch(kind="harmonic", order=1, branch_frequency=math.nan, stable=None,
+                         distance=math.nan, note="forced", **pk)
+    d, bi, i, st = best
+    b = frc.branches[bi]
+    fb = float(np.asarray(b.frequency)[i])
+    return PeakMatch(kind="harmonic", order=1, branch_frequency=fb, stable=st,
+                     distance=float(d), branch=bi, xmax=float(np.asarray(b.xmax)[i]),
+                     note="forced", response_frequency=fb, **pk)
 
 
 # -- figure --------------------------------------------------------------------------------
@@ -319,12 +437,16 @@ _ORDER_COLOUR = {1: "C0", 2: "C1", 3: "C2", 4: "C3", 5: "C5", 6: "C4"}
 
 
 def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, label="delta",
-                    unit="m", superharmonic_orders=(2, 3), scale=1e3, fig=None, **map_kw):
+                    unit="m", superharmonic_orders=(2, 3), scale=1e3, fig=None, stability=True,
+                    **map_kw):
     """The PSD (top, log) and the periodic diagram (bottom, |x|max in mm) on one
     response-frequency axis: an order-n branch at excitation frequency f is drawn at f/n,
     the harmonic branch also at k f for each k in ``superharmonic_orders`` (thin, grey);
-    each peak is marked with its kind and joined to the point that explains it.
-    ``matches`` default: ``map_peaks(psd, frc, excitation, **map_kw)``. Returns the Figure."""
+    each peak is marked with its kind (``k x f_p`` for a multiple of a stronger peak,
+    "1 forced" for the forced response in a narrow band) and joined to the point that
+    explains it. ``matches`` default: ``map_peaks(psd, frc, excitation, **map_kw)``.
+    ``stability=False`` draws every branch solid (for a diagram computed without Floquet
+    multipliers). Returns the Figure."""
     import matplotlib.pyplot as plt
 
     f, P = (np.asarray(a, dtype=float) for a in psd)
@@ -348,6 +470,10 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
         ax1.plot(m.frequency, m.psd, "v", color=c, ms=7, label=name)
         txt = {"harmonic": "1", "subharmonic": f"1/{m.order}", "superharmonic": f"{m.order}",
                "asymmetry": "asym", "unexplained": "?"}[m.kind]
+        if m.note == "forced":
+            txt = "1 forced"
+        elif m.note == "multiple":
+            txt = f"{m.order}\u00d7{m.explained_by:.4g}"
         ax1.annotate(txt, (m.frequency, m.psd), textcoords="offset points", xytext=(0, 6),
                      ha="center", fontsize=8, color=c)
         for ax in (ax1, ax2):
@@ -361,7 +487,8 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
     for b in frc.branches:
         n = int(b.order)
         c = _ORDER_COLOUR.get(n, "k")
-        fr, x, st = np.asarray(b.frequency), np.asarray(b.xmax) * scale, np.asarray(b.stable)
+        fr, x = np.asarray(b.frequency), np.asarray(b.xmax) * scale
+        st = np.asarray(b.stable, dtype=bool) if stability else np.ones(fr.size, dtype=bool)
         cuts = np.nonzero(np.diff(st.astype(int)))[0] + 1
         for seg in np.split(np.arange(fr.size), cuts):
             if seg.size == 0:
@@ -380,11 +507,10 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
     if superharmonic_orders:
         ax2.plot([], [], color="0.6", lw=0.6,
                  label="harmonic branch at k f, k = " + ", ".join(map(str, superharmonic_orders)))
-    for m in matches:
-        if m.branch >= 0:
-            resp = {"harmonic": m.branch_frequency, "subharmonic": m.branch_frequency / max(m.order, 1),
-                    "superharmonic": m.branch_frequency * m.order}[m.kind]
-            ax2.plot(resp, m.xmax * scale, "o", mfc="none", color=_KIND_COLOUR[m.kind], ms=8)
+    for m in matches:  # the diagram point that explains the peak (a multiple has none)
+        if m.branch >= 0 and m.note != "multiple" and math.isfinite(m.response_frequency):
+            ax2.plot(m.response_frequency, m.xmax * scale, "o", mfc="none",
+                     color=_KIND_COLOUR[m.kind], ms=8)
     ax2.set_xlabel("response frequency [Hz]")
     ax2.set_ylabel("|x|max [mm]")
     ax2.legend(fontsize=8, loc="upper right")

@@ -52,11 +52,12 @@ def test_resonances_of_the_synthetic_diagram(diagram):
 
 def test_broadband_assignment(diagram):
     rng = np.random.default_rng(1)
-    psd = _psd([(5.0, 2e-9), (40.0, 5e-8), (45.5, 2e-8), (120.0, 3e-9)], rng)
+    # 127 Hz: inside the broad band, no resonance, not a multiple of 40 or 45.5 Hz
+    psd = _psd([(5.0, 2e-9), (40.0, 5e-8), (45.5, 2e-8), (127.0, 3e-9)], rng)
     m = map_peaks(psd, diagram, (0.0, 200.0))
-    got = [(round(p.frequency), p.kind, p.order) for p in m]
-    assert got == [(5, "asymmetry", 0), (40, "harmonic", 1), (46, "subharmonic", 2),
-                   (120, "unexplained", 0)], got
+    got = [(round(p.frequency), p.kind, p.order, p.note) for p in m]
+    assert got == [(5, "asymmetry", 0, ""), (40, "harmonic", 1, "resonance"),
+                   (46, "subharmonic", 2, "resonance"), (127, "unexplained", 0, "")], got
     sub = m[2]
     assert sub.branch_frequency == pytest.approx(90.0, abs=0.2)
     assert sub.stable is False and sub.distance == pytest.approx(0.5, abs=0.3)
@@ -81,6 +82,78 @@ def test_band_decides_between_explanations(diagram):
     only1 = SimpleNamespace(branches=diagram.branches[:1], bifurcations=[], superharmonics=[])
     (p,) = map_peaks(psd, only1, (85.0, 95.0))
     assert p.kind == "unexplained"
+
+
+def test_multiples_of_a_stronger_peak_are_superharmonics_of_it(diagram):
+    rng = np.random.default_rng(4)
+    # broad band: the harmonic resonance at 40 Hz and its 2nd and 3rd multiples (the impact
+    # makes the response non-harmonic); 100 Hz is 2.5 x 40: no integer multiple
+    psd = _psd([(40.0, 5e-8), (80.0, 4e-9), (120.0, 2e-9), (100.0, 3e-9)], rng)
+    m = {round(p.frequency): p for p in map_peaks(psd, diagram, (0.0, 200.0))}
+    assert sorted(m) == [40, 80, 100, 120]
+    for f, k in ((80, 2), (120, 3)):
+        p = m[f]
+        assert (p.kind, p.order, p.note) == ("superharmonic", k, "multiple"), p
+        assert p.explained_by == m[40].frequency
+        assert p.branch_frequency == m[40].branch_frequency and p.stable is True
+        assert p.response_frequency == k * m[40].frequency
+        assert p.distance == pytest.approx(abs(p.frequency - k * m[40].frequency))
+    assert (m[100].kind, m[100].note) == ("unexplained", "")
+    # the parent must be the stronger peak: a 40 Hz peak weaker than the 80 Hz one
+    # explains nothing there (80 Hz stays unexplained under the broad band)
+    psd = _psd([(40.0, 2e-9), (80.0, 4e-8)], rng)
+    m = {round(p.frequency): p for p in map_peaks(psd, diagram, (0.0, 200.0))}
+    assert (m[40].kind, m[80].kind) == ("harmonic", "unexplained")
+
+
+def test_multiples_of_a_subharmonic_peak(diagram):
+    # narrow band 85-95 Hz: 45 Hz is the 1/2 subharmonic (order-2 branch at 90 Hz); 135 Hz
+    # (3/2 of the excitation) is 3 x that peak and keeps the order-2 branch point
+    rng = np.random.default_rng(5)
+    psd = _psd([(45.0, 3e-8), (135.0, 2e-9)], rng)
+    sub, third = map_peaks(psd, diagram, (85.0, 95.0))
+    assert (sub.kind, sub.order) == ("subharmonic", 2)
+    assert (third.kind, third.order, third.note) == ("superharmonic", 3, "multiple")
+    assert third.explained_by == sub.frequency and third.branch == sub.branch == 1
+    assert third.branch_frequency == sub.branch_frequency
+    assert third.stable is False
+
+
+def test_forced_response_inside_a_narrow_band(diagram):
+    rng = np.random.default_rng(6)
+    psd = _psd([(68.0, 1e-8)], rng)
+    # narrow band 60-75 Hz, no resonance at 68 Hz: the order-1 response to the band
+    (p,) = map_peaks(psd, diagram, (60.0, 75.0))
+    assert (p.kind, p.order, p.note) == ("harmonic", 1, "forced"), p
+    assert p.frequency == pytest.approx(68.0, abs=0.5)
+    # the order-1 branch point nearest the peak (branch grid 0.1 Hz)
+    assert p.branch == 0 and p.branch_frequency == pytest.approx(p.frequency, abs=0.051)
+    assert p.distance <= p.tolerance and p.stable is True
+    # a harmonic excitation at 68 Hz: the same
+    from nlbeam import Harmonic
+    (p,) = map_peaks(psd, diagram, Harmonic(1e-4, 68.0))
+    assert (p.kind, p.note) == ("harmonic", "forced")
+    # a broad band holds 68 Hz too, but a flat input makes no peak away from resonance
+    (p,) = map_peaks(psd, diagram, (0.0, 200.0))
+    assert p.kind == "unexplained"
+    # a narrow band that does not hold it
+    (p,) = map_peaks(psd, diagram, (20.0, 30.0))
+    assert p.kind == "unexplained"
+    # beyond the diagram (order-1 branch 5-80 Hz): forced, with no diagram point
+    (p,) = map_peaks(_psd([(150.0, 1e-8)], rng), diagram, (145.0, 160.0))
+    assert (p.kind, p.note, p.branch) == ("harmonic", "forced", -1)
+    assert math.isnan(p.branch_frequency) and p.stable is None
+
+
+def test_f_range_limits_the_peaks(diagram):
+    rng = np.random.default_rng(7)
+    psd = _psd([(40.0, 5e-8), (127.0, 3e-9), (190.0, 3e-9)], rng)
+    got = [round(p.frequency) for p in map_peaks(psd, diagram, (0.0, 200.0))]
+    assert got == [40, 127, 190]
+    got = [round(p.frequency) for p in map_peaks(psd, diagram, (0.0, 200.0), f_range=(0.0, 150.0))]
+    assert got == [40, 127]
+    with pytest.raises(ValueError, match=r"f_range: must satisfy 0 <= lo < hi"):
+        map_peaks(psd, diagram, f_range=(150.0, 10.0))
 
 
 def test_flat_noise_has_no_peaks(diagram):
