@@ -32,31 +32,105 @@ def _model(args):
     return nlbeam.BeamImpact.paper(**kw)
 
 
+#: the scene `nlbeam demo` runs: every kind of figure and table of `nlbeam figures`, on a
+#: smaller diagram (30-100 Hz, orders 1 and 2) and 10 s records, broad band and the narrow
+#: band around twice the harmonic resonance (the stochastic 1/2 subharmonic)
+DEMO_SCENE = """\
+# Written by `nlbeam demo`: a short version of `nlbeam figures` (the paper model).
+# Re-run or edit it with: nlbeam run demo.toml --out DIR. Units: m, s, Hz.
+title = "nlbeam demo: paper model, A = 0.1 mm / rms 0.1 mm"
+
+[periodic]
+amplitude = 1e-4            # m
+f_range = [30.0, 100.0]     # Hz: the harmonic resonance (43.5) and the 1/2 subharmonic (87)
+orders = [1, 2]
+n_grid = 10
+
+[stochastic]
+band = [0.0, 200.0]         # Hz, replaced by the sweep values
+rms = 1e-4                  # m
+seed = 1
+duration = 10.0             # s kept
+transient = 1.0             # s discarded
+psd_resolution = 0.5        # Hz
+
+[sweep]
+parameter = "band"
+values = [[0.0, 200.0], [78.0, 98.0]]
+
+[[figure]]
+kind = "frc"
+file = "demo_frequency_response.png"
+title = "|x|max vs excitation frequency, A = 0.1 mm, orders 1-2"
+
+[[figure]]
+kind = "excitation_psd"
+file = "demo_excitation_psd.png"
+f_max = 250.0
+
+[[figure]]
+kind = "pdf"
+channel = "delta"
+file = "demo_pdf_delta.png"
+
+[[figure]]
+kind = "history"
+channels = ["y", "x"]
+window = [0.0, 0.3]
+file = "demo_time_history.png"
+
+[[figure]]
+kind = "psd"
+channel = "delta"
+f_max = 200.0
+file = "demo_psd_delta.png"
+
+[[figure]]
+kind = "compare"
+channel = "delta"
+f_max = 200.0
+file = "demo_compare.png"
+
+[[table]]
+kind = "moments"
+channel = "delta"
+file = "demo_moments.csv"
+
+[[table]]
+kind = "peaks"
+channel = "delta"
+f_max = 200.0
+file = "demo_peaks.csv"
+
+[[table]]
+kind = "bifurcations"
+file = "demo_bifurcations.csv"
+"""
+
+
 def _demo(args):
-    import numpy as np
+    from .io import write_text_atomic
+    from .scenes import format_plan, load_scene, plan, run_scene
 
-    import nlbeam
+    out = args.out
+    path = os.path.join(out, "demo.toml")
+    if args.dry_run:  # nothing written: validate the text from a temporary copy
+        import tempfile
 
-    model = nlbeam.BeamImpact.paper()
-    ex = nlbeam.Harmonic(args.amplitude, args.frequency)
-    t0 = time.perf_counter()
-    nlbeam.integrate(model, ex, 0.01)  # compile or load the cached kernels
-    t1 = time.perf_counter()
-    tr = nlbeam.integrate(model, ex, args.duration, store_every=0)
-    t2 = time.perf_counter()
-    last = nlbeam.integrate(model, ex, args.duration + 10.0 / args.frequency, x0=tr.state_end,
-                            disc0=tr.disc_end, t0=args.duration, store_every=1)
-    if not args.quiet:
-        print("nlbeam demo: the paper's beam with elastic stop (m = 37.75 g, k = 736.3 N/m, "
-              "b = 0.16 kg/s, K_hertz = 2.1e8 N/m^1.5, e = 0.5, Lankarani-Nikravesh)")
-        print(f"  base excitation y = {args.amplitude:g} m * cos(2 pi {args.frequency:g} Hz t), "
-              f"RK4, dt = {tr.dt:.3g} s, {tr.steps_per_contact:g} steps per contact")
-        print(f"  simulated {args.duration:g} s in {t2 - t1:.3f} s "
-              f"({tr.n_steps / (t2 - t1):.3g} steps/s; kernel load/compile {t1 - t0:.1f} s)")
-        print(f"  impacts: {tr.n_impacts} ({tr.n_impacts / args.duration:.4g} per s)")
-        print(f"  steady state over the last 10 periods: max|x| = {last.xmax[0] * 1e3:.6f} mm, "
-              f"max penetration = {np.max(last.delta) * 1e6:.4f} um, "
-              f"{last.n_impacts} impacts")
+        with tempfile.TemporaryDirectory() as d:
+            tmp = os.path.join(d, "demo.toml")
+            with open(tmp, "w", encoding="utf-8") as fh:
+                fh.write(DEMO_SCENE)
+            scene = load_scene(tmp)
+            scene.path = path
+            print(format_plan(scene, plan(scene, out), out))
+        return 0
+    write_text_atomic(path, DEMO_SCENE)
+    # small analyses: in this process unless asked (a pool's workers would each load the
+    # compiled kernels, which costs more than the analyses here)
+    rep = run_scene(path, out, workers=args.workers or 1, quiet=args.quiet)
+    _log(args)(f"nlbeam demo: {rep.computed} computed, {rep.reused} reused, "
+               f"{len(rep.files)} files in {rep.wall_time:.1f} s -> {out} (scene: {path})")
     return 0
 
 
@@ -153,13 +227,18 @@ def _compare(args):
     frc = continuation.load(args.diagram)
     d = res.excitation_description
     band = (float(d["band_lo"]), float(d["band_hi"])) if "band_lo" in d else None
-    matches = map_peaks(res.psd(args.channel), frc, band, min_prominence=args.min_prominence)
+    if args.f_max is not None and not args.f_max > 0:
+        raise ValueError(f"--f-max: must be > 0 Hz, got {args.f_max:g}")
+    f_range = None if args.f_max is None else (0.0, args.f_max)
+    matches = map_peaks(res.psd(args.channel), frc, band, min_prominence=args.min_prominence,
+                        f_range=f_range)
     if not args.quiet:
         print(f"{'peak Hz':>9s} {'prom dec':>8s} {'kind':14s} {'order':>5s} "
-              f"{'branch f Hz':>11s} {'stable':>6s} {'dist Hz':>7s}")
+              f"{'branch f Hz':>11s} {'stable':>6s} {'dist Hz':>7s}  note")
         for m in matches:
+            note = m.note + (f" of {m.explained_by:.4g} Hz" if m.note == "multiple" else "")
             print(f"{m.frequency:9.3f} {m.prominence:8.2f} {m.kind:14s} {m.order:5d} "
-                  f"{m.branch_frequency:11.3f} {str(m.stable):>6s} {m.distance:7.3f}")
+                  f"{m.branch_frequency:11.3f} {str(m.stable):>6s} {m.distance:7.3f}  {note}")
     if args.plot:
         _agg()
         fig = plot_comparison(res.psd(args.channel), frc, matches, excitation=band,
@@ -178,7 +257,7 @@ def _run(args):
         return 0
     rep = run_scene(scene, out, workers=args.workers, scheduler=args.scheduler,
                     quiet=args.quiet)
-    _log(args)(f"nlbeam run: {rep.computed} computed, {len(rep.jobs) - rep.computed} reused, "
+    _log(args)(f"nlbeam run: {rep.computed} computed, {rep.reused} reused, "
                f"{len(rep.files)} files in {rep.wall_time:.1f} s")
     return 0
 
@@ -221,12 +300,20 @@ def _parser():
     parser.add_argument("--quiet", action="store_true", help="print nothing but errors")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("demo", parents=[common], help="integrate the paper's model under "
-                       "harmonic base excitation and print a summary (a few seconds)",
-                       description="Integrate the paper model under y = A cos(2 pi f t). " + _UNITS)
-    p.add_argument("--amplitude", type=float, default=1e-4, help="base amplitude A (m), default 1e-4")
-    p.add_argument("--frequency", type=float, default=40.0, help="excitation frequency (Hz), default 40")
-    p.add_argument("--duration", type=float, default=10.0, help="simulated time (s), default 10")
+    p = sub.add_parser("demo", parents=[common], help="a short version of `nlbeam figures`: "
+                       "every kind of figure and table on a small diagram and 10 s records "
+                       "(about half a minute once the kernels are compiled)",
+                       description="Write a small scene (OUT/demo.toml) and run it: the "
+                       "frequency-response diagram 30-100 Hz (orders 1, 2), broad-band (0-200 Hz) "
+                       "and narrow-band (78-98 Hz) base noise of rms 0.1 mm, PSDs, PDF, time "
+                       "history, the comparison and the tables. Cached like any scene: a second "
+                       "run takes seconds. " + _UNITS)
+    p.add_argument("--out", default="nlbeam-demo",
+                   help="output folder (scene, figures, tables, cache), default ./nlbeam-demo")
+    p.add_argument("--dry-run", action="store_true",
+                   help="print what would be computed or reused and written, do nothing")
+    p.add_argument("--workers", type=int, default=None,
+                   help="processes for the analyses (default 1: this process)")
     p.set_defaults(func=_demo)
 
     def model_opts(p):
@@ -278,7 +365,8 @@ def _parser():
     p.add_argument("--channel", default="delta", help="PSD channel, default delta")
     p.add_argument("--min-prominence", type=float, default=0.3,
                    help="least peak height over the running-median background (decades), default 0.3")
-    p.add_argument("--f-max", type=float, default=None, help="upper frequency of the plot (Hz)")
+    p.add_argument("--f-max", type=float, default=None,
+                   help="upper frequency (Hz) of the peaks considered and of the plot, default all")
     p.add_argument("--plot", default=None, help="write the comparison figure (PNG/PDF/SVG)")
     p.set_defaults(func=_compare)
 

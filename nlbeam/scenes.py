@@ -176,9 +176,13 @@ STOCHASTIC_KEYS = {"band": _pair(0.0), "rms": _real(0, lo_open=True, unit="m"),
                    "method": _choice(METHODS), "pdf_bins": _int(10, 100000)}
 FIGURE_KEYS = {"kind": _choice(FIGURE_KINDS), "file": _file((".png", ".pdf", ".svg")),
                "title": _str, "channel": _choice(CHANNELS), "channels": _channels,
-               "f_max": _real(0, lo_open=True, unit="Hz"), "window": _pair(0.0, unit="s")}
+               "f_max": _real(0, lo_open=True, unit="Hz"), "window": _pair(0.0, unit="s"),
+               "stability": _bool}
 TABLE_KEYS = {"kind": _choice(TABLE_KINDS), "file": _file((".csv",)),
-              "channel": _choice(CHANNELS)}
+              "channel": _choice(CHANNELS), "f_max": _real(0, lo_open=True, unit="Hz"),
+              "stability": _bool}
+#: outputs that may set ``stability = false`` (all others that read the diagram need it)
+STABILITY_OPTIONAL = ("compare", "peaks")
 SWEEP_KEYS = {"parameter": _choice(tuple(PARAMETERS)), "values": None,
               "workers": _int(1, 1024)}
 SECTIONS = {"model": MODEL_KEYS, "periodic": PERIODIC_KEYS, "stochastic": STOCHASTIC_KEYS,
@@ -355,6 +359,11 @@ def load_scene(path) -> Scene:
             if d["file"] in files:
                 fail((name, i, "file"), f"also written by {files[d['file']]}", d["file"])
             files[d["file"]] = _name((name, i))
+            if "stability" in d and d["kind"] not in STABILITY_OPTIONAL:
+                fail((name, i, "stability"), f"only {' and '.join(STABILITY_OPTIONAL)} outputs "
+                     f"can do without stability ({d['kind']!r} shows it)", d["stability"])
+            if name == "table" and "f_max" in d and d["kind"] != "peaks":
+                fail((name, i, "f_max"), "only a peaks table has a frequency range", d["f_max"])
             needs_p = d["kind"] in ("frc", "compare", "peaks", "bifurcations")
             needs_s = d["kind"] in ("excitation_psd", "pdf", "history", "psd", "compare",
                                     "moments", "peaks")
@@ -453,9 +462,10 @@ def _compute(job_inputs):
         import continuation
 
         p = job_inputs["periodic"]
+        kw = {} if p.get("stability", True) else {"stability": False}  # planned only if supported
         return continuation.frequency_response(
             model, p["amplitude"], tuple(p["f_range"]), orders=tuple(p["orders"]),
-            n_grid=p["n_grid"], segments=p["segments"], dt_scale=p["dt_scale"])
+            n_grid=p["n_grid"], segments=p["segments"], dt_scale=p["dt_scale"], **kw)
     import stochastic
 
     s = job_inputs["stochastic"]
@@ -468,9 +478,23 @@ def _compute(job_inputs):
                                pdf_bins=s["pdf_bins"], progress=job_inputs.get("_progress"))
 
 
+def _stability_optional():
+    """True when continuation.frequency_response takes ``stability`` (can skip Floquet
+    multipliers); older versions always compute them."""
+    import inspect
+
+    import continuation
+
+    try:
+        return "stability" in inspect.signature(continuation.frequency_response).parameters
+    except (TypeError, ValueError):
+        return False
+
+
 def _needs(scene):
-    """What the outputs read: (periodic?, channels -> set of outputs, history window, channels)."""
-    need_p = False
+    """What the outputs read: (periodic?, stability?, channels -> set of outputs, history
+    window, history channels)."""
+    need_p = need_stab = False
     chans = {}
     hist = None
     hist_ch = []
@@ -481,6 +505,8 @@ def _needs(scene):
     for d in scene.figures + scene.tables:
         k = d["kind"]
         ch = d.get("channel", "delta")
+        if k in ("frc", "bifurcations", "compare", "peaks"):
+            need_stab = need_stab or d.get("stability", True)
         if k in ("frc", "bifurcations"):
             need_p = True
         elif k == "psd":
@@ -500,20 +526,24 @@ def _needs(scene):
             for c in d.get("channels", ["y", "x"]):
                 if c not in hist_ch:
                     hist_ch.append(c)
-    return need_p, chans, hist, hist_ch
+    return need_p, need_stab, chans, hist, hist_ch
 
 
 def plan(scene, out_dir):
     """The jobs the scene's outputs need, each marked cached or not. Returns a list of Job."""
-    need_p, chans, hist, hist_ch = _needs(scene)
+    need_p, need_stab, chans, hist, hist_ch = _needs(scene)
+    # what is computed is what is keyed: without the keyword, stability comes anyway
+    stability = bool(need_stab) or (need_p and not _stability_optional())
     cache = os.path.join(os.fspath(out_dir), CACHE_DIR)
     jobs = []
     for label, m, p, s in scene.variants():
         if need_p:
+            p = dict(p, stability=stability)
             inputs = {"analysis": "periodic", "model": m, "periodic": p, "version": __version__}
             jobs.append(_job("periodic", label, inputs, cache,
                              f"frequency response {p['f_range'][0]:g}-{p['f_range'][1]:g} Hz, "
-                             f"A = {p['amplitude']:g} m, orders {p['orders']}"))
+                             f"A = {p['amplitude']:g} m, orders {p['orders']}"
+                             f"{'' if stability else ', no stability'}"))
         if chans or hist is not None:
             channels = sorted(set(chans) | set(hist_ch))
             outputs = sorted(set().union(*chans.values())) if chans else []
@@ -537,9 +567,14 @@ def _job(kind, label, inputs, cache, desc):
 def format_plan(scene, jobs, out_dir):
     """Human-readable plan: what will be computed, what is reused, what is written."""
     lines = [f"scene {scene.path}: {scene.title}"]
+    first = {}
     for j in jobs:
-        state = "cached " if j.cached else "compute"
         var = f" [{j.variant}]" if j.variant else ""
+        if j.path in first:  # a sweep value this analysis does not depend on
+            lines.append(f"  shared  {j.kind}{var}: the same as{first[j.path]}")
+            continue
+        first[j.path] = var or " above"
+        state = "cached " if j.cached else "compute"
         lines.append(f"  {state} {j.kind}{var}: {j.description}")
         lines.append(f"          -> {j.path}")
     if not jobs:
@@ -572,12 +607,19 @@ def _store(job, result, log=None):
 
 @dataclass
 class RunReport:
-    """What ``run_scene`` did: jobs (with cached flags as found), computed count, files."""
+    """What ``run_scene`` did: jobs (with cached flags as found; one per analysis and sweep
+    value, so a shared analysis appears more than once), computed count (distinct analyses),
+    files."""
 
     jobs: list
     computed: int
     files: list = field(default_factory=list)
     wall_time: float = 0.0
+
+    @property
+    def reused(self):
+        """Distinct analyses taken from the cache."""
+        return len({j.path for j in self.jobs if j.cached})
 
 
 def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, scheduler=None,
@@ -639,11 +681,37 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
 
 # -- outputs -------------------------------------------------------------------------------
 def _by_variant(scene, jobs, results):
+    """[(label, model, periodic, stochastic, diagram, stochastic result, job paths)]; job
+    paths: {'periodic': cache file or None, 'stochastic': ...}."""
     out = []
     for label, m, p, s in scene.variants():
-        per = next((results[j.path] for j in jobs if j.kind == "periodic" and j.variant == label), None)
-        sto = next((results[j.path] for j in jobs if j.kind == "stochastic" and j.variant == label), None)
-        out.append((label, m, p, s, per, sto))
+        paths = {k: next((j.path for j in jobs if j.kind == k and j.variant == label), None)
+                 for k in ("periodic", "stochastic")}
+        per = results[paths["periodic"]] if paths["periodic"] else None
+        sto = results[paths["stochastic"]] if paths["stochastic"] else None
+        out.append((label, m, p, s, per, sto, paths))
+    return out
+
+
+#: which analyses each output reads
+_READS = {"frc": ("periodic",), "bifurcations": ("periodic",), "history": ("stochastic",),
+          "psd": ("stochastic",), "pdf": ("stochastic",), "excitation_psd": ("stochastic",),
+          "moments": ("stochastic",), "compare": ("periodic", "stochastic"),
+          "peaks": ("periodic", "stochastic")}
+
+
+def _distinct(kind, variants):
+    """The variants an output must show: one per distinct set of the analyses it reads (a
+    sweep of a parameter the output does not depend on gives one). Labels are dropped when
+    only one is left."""
+    seen, out = set(), []
+    for v in variants:
+        key = tuple(v[6][a] for a in _READS[kind])
+        if key not in seen:
+            seen.add(key)
+            out.append(v)
+    if len(out) == 1:
+        out = [("",) + tuple(out[0][1:])]
     return out
 
 
@@ -687,11 +755,12 @@ def _figure(scene, d, variants, out_dir):
     kind = d["kind"]
     ch = d.get("channel", "delta")
     target = os.path.join(out_dir, d["file"])
+    variants = _distinct(kind, variants)
     multi = len(variants) > 1
     title = d.get("title", scene.title)
     if kind in ("frc", "history", "compare"):
         written = []
-        for i, (label, m, p, s, per, sto) in enumerate(variants):
+        for i, (label, m, p, s, per, sto, _) in enumerate(variants):
             path = _suffixed(target, i, len(variants))
             t = title + (f" ({label})" if label else "")
             if kind == "frc":
@@ -703,8 +772,10 @@ def _figure(scene, d, variants, out_dir):
             elif kind == "compare":
                 from .compare import plot_comparison
 
+                f_max = d.get("f_max", _default_f_max(p, s))
                 fig = plot_comparison(sto.psd(ch), per, excitation=_noise(s), label=ch,
-                                      f_max=d.get("f_max"))
+                                      f_max=f_max, f_range=(0.0, f_max),
+                                      stability=d.get("stability", True))
                 fig.axes[0].set_title(t)
             else:
                 chans = d.get("channels", ["y", "x"])
@@ -725,7 +796,7 @@ def _figure(scene, d, variants, out_dir):
             written.append(_save_fig(fig, path))
         return written
     fig, ax = plt.subplots(figsize=(8, 5))
-    for label, m, p, s, per, sto in variants:
+    for label, m, p, s, per, sto, _ in variants:
         lab = label or None
         if kind == "psd":
             f, P = sto.psd(ch)
@@ -773,13 +844,19 @@ def _unit(ch):
     return {"x": "m", "y": "m", "delta": "m", "v": "m/s", "yd": "m/s", "force": "N"}[ch]
 
 
+def _default_f_max(p, s):
+    """Peaks and comparisons look up to the excitation band's or the diagram's upper end
+    (whichever is higher), not to the Nyquist frequency of the record."""
+    return max(float(s["band"][1]), float(p["f_range"][1]))
+
+
 def _table(d, variants, out_dir):
     from .compare import map_peaks
 
     kind = d["kind"]
     ch = d.get("channel", "delta")
     rows = []
-    for label, m, p, s, per, sto in variants:
+    for label, m, p, s, per, sto, _ in _distinct(kind, variants):
         if kind == "moments":
             mo = sto.moments(ch)
             rows.append({"variant": label, "channel": ch,
@@ -787,8 +864,12 @@ def _table(d, variants, out_dir):
                                                "se_mean", "se_std", "se_skewness",
                                                "se_kurtosis") if k in mo}})
         elif kind == "peaks":
-            for pk in map_peaks(sto.psd(ch), per, _noise(s)):
-                rows.append({"variant": label, "channel": ch, **pk.as_row()})
+            f_max = d.get("f_max", _default_f_max(p, s))
+            for pk in map_peaks(sto.psd(ch), per, _noise(s), f_range=(0.0, f_max)):
+                row = pk.as_row()
+                if not d.get("stability", True):
+                    row["stable"] = ""  # not asked for (and not computed when supported)
+                rows.append({"variant": label, "channel": ch, **row})
         else:
             for b in per.bifurcations:
                 rows.append({"variant": label, "kind": b.kind, "order": b.order,

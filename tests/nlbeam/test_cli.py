@@ -26,11 +26,40 @@ file = "moments.csv"
 """
 
 
-def test_demo_still_runs(capsys):
-    assert main(["demo", "--duration", "0.5"]) == 0
-    assert "impacts" in capsys.readouterr().out
-    assert main(["demo", "--duration", "0.5", "--quiet"]) == 0
-    assert capsys.readouterr().out == ""
+DEMO_FILES = ["demo.toml", "demo_bifurcations.csv", "demo_compare_1.png", "demo_compare_2.png",
+              "demo_excitation_psd.png", "demo_frequency_response.png", "demo_moments.csv",
+              "demo_pdf_delta.png", "demo_peaks.csv", "demo_psd_delta.png",
+              "demo_time_history_1.png", "demo_time_history_2.png"]
+
+
+def test_demo_is_a_short_nlbeam_figures(tmp_path, capsys):
+    """nlbeam demo writes its scene and every kind of figure and table of nlbeam figures:
+    the diagram once (the band sweep does not touch it), the comparison and the history
+    once per band; the broad band's delta is skewed like the paper's (-1.02), and the
+    narrow band around twice the harmonic resonance answers at half its frequencies."""
+    out = tmp_path / "demo"
+    assert main(["demo", "--out", str(out), "--dry-run"]) == 0
+    plan_text = capsys.readouterr().out
+    assert "compute periodic" in plan_text and "shared  periodic" in plan_text
+    assert not out.exists()
+    assert main(["demo", "--out", str(out), "--quiet"]) == 0
+    cap = capsys.readouterr()
+    assert cap.out == "" and cap.err == ""
+    assert sorted(f for f in os.listdir(out) if not f.startswith(".")) == DEMO_FILES
+    for f in DEMO_FILES:
+        if f.endswith(".png"):
+            assert (out / f).stat().st_size > 5000, f
+    import csv
+
+    mom = {r["variant"]: r for r in csv.DictReader(open(out / "demo_moments.csv"))}
+    assert float(mom["band=0-200"]["skewness"]) < -0.5
+    peaks = list(csv.DictReader(open(out / "demo_peaks.csv")))
+    sub = [r for r in peaks if r["variant"] == "band=78-98" and r["kind"] == "subharmonic"]
+    assert sub and all(35.0 < float(r["frequency_hz"]) < 50.0 for r in sub)
+    assert all(float(r["frequency_hz"]) <= 200.0 for r in peaks)
+    # everything is cached now: the plan computes nothing
+    assert main(["demo", "--out", str(out), "--dry-run"]) == 0
+    assert "compute" not in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("cmd", [[], ["frc"], ["simulate"], ["run"], ["figures"], ["compare"]])
@@ -76,11 +105,18 @@ def test_frc_simulate_compare(tmp_path, capsys):
     frc, sto, png = (str(tmp_path / n) for n in ("frc.h5", "sto.h5", "cmp.png"))
     assert main(["frc", "--amplitude", "1e-4", "--f-range", "42", "45", "--orders", "1",
                  "--n-grid", "3", "--out", frc, "--quiet"]) == 0
-    assert main(["simulate", "--band", "0", "100", "--duration", "4", "--transient", "0.1",
+    assert main(["simulate", "--band", "0", "100", "--duration", "10", "--transient", "0.1",
                  "--psd-resolution", "1", "--channels", "delta", "--out", sto, "--quiet"]) == 0
     capsys.readouterr()
-    assert main(["compare", sto, frc, "--plot", png]) == 0
+    assert main(["compare", sto, frc, "--plot", png, "--f-max", "150"]) == 0
     out = capsys.readouterr().out
     lines = out.strip().splitlines()
-    assert lines[0].split()[:2] == ["peak", "Hz"] and len(lines) >= 2  # header + >= 1 peak
+    assert lines[0].split()[:2] == ["peak", "Hz"] and lines[0].split()[-1] == "note"
+    rows = [ln.split() for ln in lines[1:]]
+    # the harmonic resonance of the 42-45 Hz diagram explains the strongest peak
+    assert any(r[2] == "harmonic" and r[-1] == "resonance" and 40 < float(r[0]) < 46
+               for r in rows), out
+    assert all(float(r[0]) <= 150.0 for r in rows)  # --f-max limits the peaks
     assert os.path.getsize(png) > 1000
+    assert main(["compare", sto, frc, "--f-max", "0"]) == 2
+    assert "--f-max: must be > 0 Hz" in capsys.readouterr().err

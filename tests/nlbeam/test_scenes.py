@@ -4,9 +4,14 @@ key of exactly its inputs, reuses it, and refuses a malformed file before any wo
 The analyses are counted by wrapping continuation.frequency_response and stochastic.simulate
 (the scene looks them up at call time). Settings are tiny: 1.5 s records, a 3-point diagram.
 """
+import csv
+import functools
 import json
+import math
 import os
+from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 import continuation
@@ -41,10 +46,12 @@ def calls(monkeypatch):
     n = {"frc": 0, "sim": 0}
     frc0, sim0 = continuation.frequency_response, stochastic.simulate
 
+    @functools.wraps(frc0)  # keeps the signature: scenes look for the stability keyword
     def frc(*a, **k):
         n["frc"] += 1
         return frc0(*a, **k)
 
+    @functools.wraps(sim0)
     def sim(*a, **k):
         n["sim"] += 1
         return sim0(*a, **k)
@@ -167,3 +174,108 @@ def test_bundled_scenes_are_valid():
         sc = load_scene(p)
         assert sc.figures, p
         plan(sc, os.path.join(root, "figures"))
+
+
+@pytest.fixture
+def umask_027():
+    old = os.umask(0o027)
+    yield 0o640
+    os.umask(old)
+
+
+def test_cache_and_outputs_get_the_usual_mode(tmp_path, umask_027):
+    # results were written through tempfile.mkstemp (0600); now 0666 minus the umask
+    scene = _write(tmp_path, PERIODIC + STOCH + PSD_FIG + '[[table]]\nkind = "bifurcations"\n'
+                   'file = "b.csv"\n')
+    out = tmp_path / "out"
+    run_scene(scene, out, quiet=True)
+    files = _files(out)
+    assert {f for f in files if f.endswith(".h5")} and "psd.png" in files and "b.csv" in files
+    modes = {f: oct(os.stat(out / f).st_mode & 0o777) for f in files}
+    assert set(modes.values()) == {oct(umask_027)}, modes
+    assert not [f for f in files if os.path.basename(f).startswith(".tmp-")]
+
+
+def _frc_with_stability(seen, supported=True):
+    real = continuation.frequency_response
+    if supported:
+        def frc(model, amplitude, f_range, orders=(1, 2, 3), *, stability=True, **kw):
+            seen.append(stability)
+            return real(model, amplitude, f_range, orders=orders, **kw)
+    else:
+        def frc(model, amplitude, f_range, orders=(1, 2, 3), **kw):
+            seen.append(kw.get("stability", "not passed"))
+            return real(model, amplitude, f_range, orders=orders, **kw)
+    return frc
+
+
+PEAKS_NO_STAB = '[[table]]\nkind = "peaks"\nfile = "peaks.csv"\nstability = false\n'
+
+
+def test_no_stability_where_none_is_shown(tmp_path, monkeypatch):
+    seen = []
+    monkeypatch.setattr(continuation, "frequency_response", _frc_with_stability(seen))
+    scene = _write(tmp_path, PERIODIC + STOCH + PEAKS_NO_STAB)
+    out = tmp_path / "out"
+    rep = run_scene(scene, out, quiet=True)
+    assert seen == [False]
+    (per,) = [j for j in rep.jobs if j.kind == "periodic"]
+    assert per.inputs["periodic"]["stability"] is False
+    assert json.loads(open(per.path[:-3] + ".json").read())["periodic"]["stability"] is False
+    rows = list(csv.DictReader(open(out / "peaks.csv")))
+    assert rows and all(r["stable"] == "" for r in rows)
+    # a diagram figure shows stability: another cache entry, computed with it
+    scene.write_text(PERIODIC + STOCH + PEAKS_NO_STAB + '[[figure]]\nkind = "frc"\nfile = "f.png"\n')
+    rep2 = run_scene(scene, out, quiet=True)
+    (per2,) = [j for j in rep2.jobs if j.kind == "periodic"]
+    assert seen == [False, True] and per2.path != per.path
+    assert per2.inputs["periodic"]["stability"] is True
+
+
+def test_stability_keyword_is_passed_only_when_supported(tmp_path, monkeypatch):
+    seen = []
+    monkeypatch.setattr(continuation, "frequency_response", _frc_with_stability(seen, False))
+    scene = _write(tmp_path, PERIODIC + STOCH + PEAKS_NO_STAB)
+    rep = run_scene(scene, tmp_path / "out", quiet=True)
+    assert seen == ["not passed"]
+    (per,) = [j for j in rep.jobs if j.kind == "periodic"]
+    assert per.inputs["periodic"]["stability"] is True  # the key says what was computed
+
+
+def test_stability_only_for_outputs_that_can_do_without(tmp_path, calls):
+    text = PERIODIC + STOCH + '[[figure]]\nkind = "frc"\nfile = "f.png"\nstability = false\n'
+    scene = _write(tmp_path, text)
+    with pytest.raises(SceneError) as err:
+        load_scene(scene)
+    line = text.splitlines().index("stability = false") + 1
+    assert f"scene.toml:{line}: figure[0].stability: only compare and peaks" in str(err.value)
+    text = STOCH + '[[table]]\nkind = "moments"\nfile = "m.csv"\nf_max = 50.0\n'
+    scene.write_text(text)
+    with pytest.raises(SceneError, match="table\\[0\\].f_max: only a peaks table"):
+        load_scene(scene)
+
+
+def test_peaks_table_stops_at_f_max(tmp_path):
+    """A peak near the Nyquist frequency (3224 Hz in a bundled run) is not listed: the
+    table looks up to f_max (default: the upper end of the band or the diagram)."""
+    from nlbeam.scenes import _table
+
+    f = np.arange(0.0, 3300.0, 0.5)
+    P = 1e-10 * (1 + 1e3 / (1 + ((f - 40.0) / 0.8) ** 2) + 30 / (1 + ((f - 3224.0) / 0.8) ** 2))
+    sto = SimpleNamespace(psd=lambda ch: (f, P))
+    fr1 = np.linspace(5.0, 150.0, 1451)
+    per = SimpleNamespace(branches=[SimpleNamespace(
+        order=1, frequency=fr1, xmax=1e-4 + 1e-3 / (1 + ((fr1 - 40.0) / 2) ** 2),
+        stable=np.ones(fr1.size, bool))], bifurcations=[], superharmonics=[])
+    p = {"f_range": [5.0, 150.0]}
+    s = {"band": [0.0, 200.0], "rms": 1e-4, "seed": 1, "lowpass": None}
+    variants = [("", {}, p, s, per, sto, {"periodic": "a", "stochastic": "b"})]
+
+    def freqs(d):
+        _table(dict(d, kind="peaks", file="t.csv"), variants, tmp_path)
+        return [float(r["frequency_hz"]) for r in csv.DictReader(open(tmp_path / "t.csv"))]
+
+    assert freqs({}) == [40.0]
+    assert freqs({"f_max": 30.0}) == []
+    got = freqs({"f_max": 3300.0})
+    assert len(got) == 2 and got[0] == 40.0 and math.isclose(got[1], 3224.0, abs_tol=0.5)

@@ -105,3 +105,42 @@ def test_unreachable_scheduler_is_a_clear_error(tmp_path):
     pytest.importorskip("distributed")
     with pytest.raises(RuntimeError, match="scheduler"):
         run_jobs(_square, [1, 2], scheduler="tcp://127.0.0.1:9", connect_timeout=1.0)
+
+
+def test_output_that_does_not_depend_on_the_swept_parameter_is_written_once(tmp_path):
+    """A seed sweep: the diagram (and its figure and table) is the same for every value, so
+    it is computed and written once; the comparison reads the stochastic run and comes once
+    per value."""
+    text = SWEEP.replace("[sweep]", """
+[periodic]
+amplitude = 1e-4
+f_range = [42.0, 45.0]
+orders = [1]
+n_grid = 3
+
+[sweep]""") + """
+[[figure]]
+kind = "frc"
+file = "frc.png"
+
+[[figure]]
+kind = "compare"
+file = "cmp.png"
+
+[[table]]
+kind = "bifurcations"
+file = "bif.csv"
+"""
+    (tmp_path / "s.toml").write_text(text)
+    from nlbeam.scenes import format_plan, plan
+
+    sc = load_scene(tmp_path / "s.toml")
+    lines = format_plan(sc, plan(sc, tmp_path / "out"), str(tmp_path / "out")).splitlines()
+    assert sum("compute periodic" in x for x in lines) == 1
+    assert sum("shared  periodic [seed=2]" in x for x in lines) == 1
+    rep = run_scene(tmp_path / "s.toml", tmp_path / "out", workers=1, quiet=True)
+    assert rep.computed == 3 and rep.reused == 0
+    names = sorted(os.path.basename(f) for f in rep.files)
+    assert names == ["bif.csv", "cmp_1.png", "cmp_2.png", "frc.png", "moments.csv", "psd.png"]
+    moments = (tmp_path / "out" / "moments.csv").read_text().splitlines()
+    assert [r.split(",")[0] for r in moments[1:]] == ["seed=1", "seed=2"]
