@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import warnings
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,6 +20,11 @@ METHODS = {"rk2": _k.RK2, "rk4": _k.RK4, "adaptive": _k.DP5}
 _STEPS_PER_PERIOD = {"rk2": 400, "rk4": 100, "adaptive": 32}
 _STEPS_PER_CONTACT = {"rk2": 96, "rk4": 32, "adaptive": 32}
 MIN_STEPS_PER_CONTACT = 8
+# |omega dt| of the highest undamped mode beyond which the explicit step amplifies it: RK4 2 sqrt 2
+# (imaginary axis); Heun grows an undamped mode by ~(omega dt)^4 / 8 per step at any dt, its
+# real-axis limit 2 is taken. The defaults stay far below (omega dt = 2 pi / steps per period).
+_STABILITY = {"rk2": 2.0, "rk4": 2.0 * math.sqrt(2.0)}
+_F_MAX = weakref.WeakKeyDictionary()
 
 
 class IntegrationError(RuntimeError):
@@ -114,6 +120,20 @@ class Flow:
     min_steps_per_contact: int = -1
 
 
+def _check_stable_step(model, excitation, method, dt):
+    """Raise when a fixed step dt (s) is beyond the explicit method's stability limit for the
+    highest natural frequency of the model (a stiff high mode of a multi-mode model)."""
+    sysm = model.system
+    fmax = _F_MAX.get(sysm)
+    if fmax is None:
+        fmax = _F_MAX[sysm] = float(np.max(sysm.natural_frequencies()))
+    if 2 * math.pi * fmax * dt > _STABILITY[method]:
+        lim = _STABILITY[method] / (2 * math.pi * fmax)
+        raise ValueError(f"dt: {dt:.4g} s is beyond the stability limit {lim:.4g} s of {method!r} "
+                         f"for the model's highest natural frequency {fmax:.6g} Hz; use a smaller "
+                         f"dt or dt=None (default {default_dt(model, excitation, method):.4g} s)")
+
+
 def _prepare(model, excitation, method, dt, steps_per_contact, t0, t_end):
     if not hasattr(model, "kernel_arrays"):
         raise ValueError("model: must be an nlbeam model (BeamImpact, Duffing, System, ...)")
@@ -127,6 +147,8 @@ def _prepare(model, excitation, method, dt, steps_per_contact, t0, t_end):
     if dt is None:
         dt = default_dt(model, excitation, method)
     positive("dt", dt, unit="s")
+    if method in _STABILITY:
+        _check_stable_step(model, excitation, method, dt)
     if steps_per_contact is None:
         steps_per_contact = _STEPS_PER_CONTACT[method]
     positive("steps_per_contact", steps_per_contact)
