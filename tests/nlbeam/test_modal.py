@@ -202,3 +202,9 @@ def test_scene_names_the_modal_beam(tmp_path):
         p.write_text(text)
         with pytest.raises(SceneError, match=key):
             load_scene(p)
+
+
+def test_explicit_step_beyond_stability_limit_is_refused():
+    mb = ModalBeam.paper(n_modes=10)
+    with pytest.raises(ValueError, match="^dt: .*stability limit"):
+        nlbeam.integrate(mb, nlbeam.Harmonic(1e-4, 40.0), 0.1, dt=5e-4)
