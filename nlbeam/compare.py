@@ -478,9 +478,10 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
                      ha="center", fontsize=8, color=c)
         for ax in (ax1, ax2):
             ax.axvline(m.frequency, color=c, lw=0.6, ls=":")
-    if np.any(pos):
-        top = float(P[pos].max())
-        ax1.set_ylim(max(float(P[pos].min()), top * 1e-8), top * 5.0)
+    shown = pos & (f <= (f_max if f_max is not None else np.inf))  # y range from what is seen
+    if np.any(shown):
+        top = float(P[shown].max())
+        ax1.set_ylim(max(float(P[shown].min()) / 2.0, top * 1e-8), top * 5.0)
     ax1.set_ylabel(f"PSD of {label} [{unit}$^2$/Hz]")
     ax1.legend(fontsize=8, loc="upper right")
     done = set()

@@ -432,6 +432,21 @@ def _model(spec):
     return nlbeam.BeamImpact(**kw)
 
 
+def _model_inputs(spec):
+    """The model as keyed: a BeamImpact spec with the constructor's defaults filled in, so
+    a scene that writes a default out and one that leaves it share a cache entry."""
+    if spec.get("name", "BeamImpact") != "BeamImpact":
+        return spec
+    import inspect
+
+    import nlbeam
+
+    full = {k: p.default for k, p in inspect.signature(nlbeam.BeamImpact).parameters.items()
+            if p.default is not inspect.Parameter.empty and p.default is not None}
+    full.update((k, v) for k, v in spec.items() if k != "name")
+    return full
+
+
 def _noise(s):
     import stochastic
 
@@ -537,6 +552,7 @@ def plan(scene, out_dir):
     cache = os.path.join(os.fspath(out_dir), CACHE_DIR)
     jobs = []
     for label, m, p, s in scene.variants():
+        m = _model_inputs(m)
         if need_p:
             p = dict(p, stability=stability)
             inputs = {"analysis": "periodic", "model": m, "periodic": p, "version": __version__}

@@ -279,3 +279,17 @@ def test_peaks_table_stops_at_f_max(tmp_path):
     assert freqs({"f_max": 30.0}) == []
     got = freqs({"f_max": 3300.0})
     assert len(got) == 2 and got[0] == 40.0 and math.isclose(got[1], 3224.0, abs_tol=0.5)
+
+
+def test_a_default_written_out_keys_the_same_analysis(tmp_path):
+    # paper_broadband.toml spells the paper's contact parameters out, paper_narrowband.toml
+    # leaves them: both must find the one diagram in the cache
+    a = load_scene(_write(tmp_path, PERIODIC + PSD_FIG.replace("psd", "frc"), "a.toml"))
+    b = load_scene(_write(tmp_path, '[model]\ne = 0.5\nK_hertz = 2.1e8\ncontact = '
+                          '"lankarani-nikravesh"\n' + PERIODIC + PSD_FIG.replace("psd", "frc"),
+                          "b.toml"))
+    c = load_scene(_write(tmp_path, "[model]\ne = 0.6\n" + PERIODIC +
+                          PSD_FIG.replace("psd", "frc"), "c.toml"))
+    (ja,), (jb,), (jc,) = (plan(x, tmp_path) for x in (a, b, c))
+    assert ja.key == jb.key != jc.key
+    assert ja.inputs["model"]["e"] == 0.5 and jc.inputs["model"]["e"] == 0.6
