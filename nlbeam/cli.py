@@ -108,10 +108,17 @@ file = "demo_bifurcations.csv"
 """
 
 
+def _check_workers(args):
+    w = getattr(args, "workers", None)
+    if w is not None and w < 1:
+        raise ValueError(f"--workers: must be an integer >= 1, got {w}")
+
+
 def _demo(args):
     from .io import write_text_atomic
     from .scenes import format_plan, load_scene, plan, run_scene
 
+    _check_workers(args)
     out = args.out
     path = os.path.join(out, "demo.toml")
     if args.dry_run:  # nothing written: validate the text from a temporary copy
@@ -128,7 +135,8 @@ def _demo(args):
     write_text_atomic(path, DEMO_SCENE)
     # small analyses: in this process unless asked (a pool's workers would each load the
     # compiled kernels, which costs more than the analyses here)
-    rep = run_scene(path, out, workers=args.workers or 1, quiet=args.quiet)
+    rep = run_scene(path, out, workers=1 if args.workers is None else args.workers,
+                    quiet=args.quiet)
     _log(args)(f"nlbeam demo: {rep.computed} computed, {rep.reused} reused, "
                f"{len(rep.files)} files in {rep.wall_time:.1f} s -> {out} (scene: {path})")
     return 0
@@ -250,6 +258,7 @@ def _compare(args):
 def _run(args):
     from .scenes import format_plan, load_scene, plan, run_scene
 
+    _check_workers(args)
     scene = load_scene(args.scene)
     out = args.out or "."
     if args.dry_run:
@@ -274,6 +283,7 @@ def bundled_scenes():
 def _figures(args):
     from .scenes import format_plan, load_scene, plan, run_scene
 
+    _check_workers(args)
     folder, paths = bundled_scenes()
     if args.only:
         paths = [p for p in paths if os.path.splitext(os.path.basename(p))[0] in args.only]

@@ -60,6 +60,10 @@ def test_demo_is_a_short_nlbeam_figures(tmp_path, capsys):
     # everything is cached now: the plan computes nothing
     assert main(["demo", "--out", str(out), "--dry-run"]) == 0
     assert "compute" not in capsys.readouterr().out
+    # bad input: one line naming the option, nothing written
+    assert main(["demo", "--out", str(tmp_path / "bad"), "--workers", "0"]) == 2
+    assert "--workers: must be an integer >= 1" in capsys.readouterr().err
+    assert not (tmp_path / "bad").exists()
 
 
 @pytest.mark.parametrize("cmd", [[], ["frc"], ["simulate"], ["run"], ["figures"], ["compare"]])
