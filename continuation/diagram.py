@@ -569,7 +569,7 @@ def _superharmonics(branches, model, integrator, orders=(2, 3), window=0.15, min
 def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30, segments=1,
                        integrator=None, switch=True, brute_force_grid=True, starts=(),
                        ds=0.02, ds_max=0.5, max_angle=0.2, max_points=1000, tol=1e-10,
-                       bif_tol=1e-10, **integrator_kw):
+                       bif_tol=1e-8, **integrator_kw):
     """The |x|max-versus-frequency diagram at excitation amplitude (m, or N for force).
 
     f_range: (f_lo, f_hi) Hz. Branches of each order in ``orders`` start from periodic
@@ -605,7 +605,7 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
 
 def continue_parameter(solution, parameter, p_range, *, model, segments=1, integrator=None,
                        ds=0.02, ds_max=0.5, max_angle=0.2, max_points=1000, tol=1e-10,
-                       bif_tol=1e-10, **integrator_kw):
+                       bif_tol=1e-8, **integrator_kw):
     """Follow a PeriodicSolution of ``model`` in ``parameter`` ('amplitude', 'frequency', or a
     model field such as 'e' or 'K_hertz') over p_range, both ways. Returns a FrequencyResponse
     with one branch (and the bifurcations on it)."""

@@ -7,6 +7,7 @@ with ``transfer(old_problem, u, p)``. Work is done in scaled variables (u / scal
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -24,6 +25,9 @@ class Point:
     multipliers: np.ndarray
     problem: object
     n_impacts: int = 0
+    jac: np.ndarray | None = None  # scaled [dR/du | dR/dp] (n, n + 1) at the point (quasi-Newton)
+    corr: np.ndarray | None = None  # its secant correction (see Tracer.correct)
+    tangent: np.ndarray | None = None  # unit tangent (scaled) in the direction of travel
 
 
 @dataclass
@@ -55,6 +59,10 @@ def _scaled(ev, w, wp):
     return ev.R / w, J
 
 
+class ContinuationWarning(UserWarning):
+    """A branch was stopped early (no progress); the message says where and what to change."""
+
+
 def tangent(J, t_prev):
     """Unit null vector of J (n, n+1) with a positive projection on t_prev."""
     A = np.vstack([J, t_prev[None, :]])
@@ -67,13 +75,28 @@ def tangent(J, t_prev):
 class Tracer:
     """Follows one branch. Options: p_min, p_max (stop outside), ds (initial step, scaled),
     ds_min, ds_max, max_angle (rad, between successive tangents), max_points, tol (corrector,
-    scaled residual), bif_tol (relative width in p of the bracket of a located bifurcation),
-    detect (bool)."""
+    scaled residual; where the iteration stagnates below noise_tol, as where contacts nearly
+    stick and the fixed-step map has noise of 1e-8..1e-7, the better iterate is accepted), bif_tol (relative width in p of the bracket of a located bifurcation),
+    detect (bool), grazing_ds (longest step, scaled, that may change the number of impacts per
+    period: longer ones are halved), progress_points / progress_min (the no-progress rule: a branch whose last
+    ``progress_points`` points together advance less than ``progress_min`` in scaled arclength
+    is stopped with a ContinuationWarning), label (names the branch in that warning).
+
+    The corrector is a quasi-Newton iteration on the bordered system: the Jacobian at the
+    predictor is dR/du from the variational equations (or, for a problem without them, the
+    previous point's Jacobian, or forward differences) with dR/dp carried from the previous
+    point, and every iterate updates it by Broyden's rank-one secant formula. The variational
+    monodromy is the derivative of the exact flow, not of the fixed-step map whose fixed point
+    is solved for (the contact steps depend on the state); where the two differ by more than a
+    few per cent (soft, chattering contacts; orbits with multipliers >> 1) plain Newton only
+    converges linearly and the step control used to creep. The secant updates make the
+    iteration converge superlinearly to the discrete map's fixed point there too."""
 
     def __init__(self, *, p_min=-np.inf, p_max=np.inf, ds=0.02, ds_min=1e-7, ds_max=0.1,
                  max_angle=0.15, max_points=3000, tol=1e-10, bif_tol=1e-10, detect=True,
-                 max_iter=8, jump_after=2, jump_steps=(1e-5, 1e-4, 1e-3), jump_max_distance=0.05,
-                 grazing_iter=8, contraction=0.5):
+                 max_iter=10, jump_after=2, jump_steps=(1e-5, 1e-4, 1e-3), jump_max_distance=0.05,
+                 grazing_iter=8, grazing_ds=0.01, contraction=0.7, noise_tol=1e-7,
+                 progress_points=40, progress_min=2e-3, label="branch"):
         self.p_min, self.p_max = p_min, p_max
         self.ds0, self.ds_min, self.ds_max = ds, ds_min, ds_max
         self.max_angle = max_angle
@@ -86,42 +109,99 @@ class Tracer:
         self.jump_steps = tuple(jump_steps)
         self.jump_max_distance = jump_max_distance
         self.grazing_iter = grazing_iter
+        self.grazing_ds = grazing_ds
         self.contraction = contraction
+        self.noise_tol = max(noise_tol, tol)
+        self.progress_points = progress_points
+        self.progress_min = progress_min
+        self.label = label
         self.n_evaluations = 0
         self.debug = False
 
     # --- corrector ------------------------------------------------------------------------------
-    def correct(self, prob, zeta_pred, t):
-        """Solve R = 0 with t . (zeta - zeta_pred) = 0 by Newton from zeta_pred; dR/dp is taken
-        once, at the predictor (a chord in the parameter column). Returns (zeta, evaluation,
-        iterations); the evaluation (with the monodromies) is the one at the returned zeta."""
+    def _base(self, prob, ev):
+        """The scaled Jacobian part the evaluation provides: [dR/du | 0] from the variational
+        equations, or zeros for a problem without them."""
+        w = prob.scale_u
+        n = len(w)
+        B = np.zeros((n, n + 1))
+        if ev.Ju is not None:
+            B[:, :n] = ev.Ju * w[None, :] / w[:, None]
+        return B
+
+    def _correction(self, prob, z, ev, C_prev):
+        """The secant correction to start from: the previous point's (or, at a first point,
+        without variational equations, dR/du by forward differences), with dR/dp by a forward
+        difference at z."""
         w, wp = prob.scale_u, prob.scale_p
+        n = len(w)
+        if C_prev is not None and ev.Ju is None:
+            C = C_prev.copy()
+        else:
+            C = np.zeros((n, n + 1))
+            if ev.Ju is None:
+                C[:, :n] = prob.jacobian_u(z[:-1] * w, z[-1] * wp, ev) * w[None, :] / w[:, None]
+                self.n_evaluations += n
+        # dR/dp changes fastest along a branch: a fresh forward difference (one flow without
+        # variational equations) saves more iterations than it costs
+        C[:, n] = prob.jacobian_p(z[:-1] * w, z[-1] * wp, ev) * wp / w
+        self.n_evaluations += 1
+        return C
+
+    def correct(self, prob, zeta_pred, t, C_prev=None):
+        """Solve R = 0 with t . (zeta - zeta_pred) = 0 from zeta_pred by quasi-Newton (see the
+        class doc): the Jacobian is B = [dR/du from the variational equations at the iterate
+        | 0] + C, with the correction C (its last column dR/dp) updated by Broyden's formula so
+        that B meets the secant condition of every step, and carried from point to point
+        (C_prev: that of a nearby point). Returns (zeta, evaluation, iterations); the
+        evaluation (with the monodromies, if computed) is the one at the returned zeta, with
+        ``B`` the final Jacobian and ``C`` its correction."""
+        w, wp = prob.scale_u, prob.scale_p
+        var = getattr(prob, "variational", True)
         z = zeta_pred.copy()
-        Jp = None
+        C = None
+        dz = None
         dz_norm = np.inf
         res_prev = np.inf
+        r_prev = None
         self.impacts_seen = set()
         for it in range(1, self.max_iter + 1):
             try:
-                ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=True, jac_p=Jp is None)
+                ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=var, jac_p=False)
             except ConvergenceError:
                 break
             self.n_evaluations += 1
             self.impacts_seen.add(ev.n_impacts)
-            if Jp is None:
-                Jp = ev.Jp
-            ev.Jp = Jp
-            r, J = _scaled(ev, w, wp)
+            r = ev.R / w
             res = float(np.max(np.abs(r)))
+            if self.debug:
+                print("    it %d res %.2e imp %d" % (it, res, ev.n_impacts))
             if not np.isfinite(res):
                 break
+            base = self._base(prob, ev)
+            if C is None:
+                C = self._correction(prob, z, ev, C_prev)
+            elif dz_norm > 1e-6:
+                # Broyden's update (not from steps so short that the map's noise, ~1e-8 where
+                # contacts nearly stick, would dominate the difference)
+                C = C + np.outer(r - r_prev - (base + C) @ dz, dz) / (dz @ dz)
+            B = base + C
+            ev.B, ev.C = B, C
             if res < self.tol or (res < 100 * self.tol and dz_norm < 1e-9):
                 return z, ev, it
             if it >= 3 and res > self.contraction * res_prev:
-                break  # not converging like Newton: the map is not smooth here, or the step is
-                # too long; give up early (the caller halves the step)
+                if res_prev < self.noise_tol and res < self.noise_tol:
+                    # stagnating below noise_tol: the fixed-step map is not smooth at this
+                    # level (contact step decisions); accept the better iterate
+                    if res_prev < res:
+                        return z_prev, ev_prev, it
+                    return z, ev, it
+                break  # not converging: the map is not smooth here, or the step is too long;
+                # give up early (the caller halves the step)
+            z_prev, ev_prev = z, ev
             res_prev = res
-            A = np.vstack([J, t[None, :]])
+            r_prev = r
+            A = np.vstack([B, t[None, :]])
             try:
                 dz = np.linalg.solve(A, -np.r_[r, t @ (z - zeta_pred)])
             except np.linalg.LinAlgError:
@@ -131,26 +211,41 @@ class Tracer:
         raise ConvergenceError("corrector did not converge; try a smaller step (ds) or multiple "
                                "shooting (segments=4)")
 
-    def _point(self, prob, z, ev):
+    def _point(self, prob, z, ev, t_ref=None):
         u = z[:-1] * prob.scale_u
-        return Point(u=u, p=float(z[-1] * prob.scale_p), xmax=ev.xmax,
-                     multipliers=prob.multipliers(ev.Ms), problem=prob, n_impacts=ev.n_impacts)
+        mu = prob.multipliers(ev.Ms) if ev.Ms else None
+        B = getattr(ev, "B", None)
+        if B is None and ev.Ju is not None and ev.Jp is not None:
+            B = _scaled(ev, prob.scale_u, prob.scale_p)[1]
+        tn = tangent(B, t_ref) if (t_ref is not None and B is not None) else None
+        C = getattr(ev, "C", None)
+        if C is None and B is not None:
+            C = B - self._base(prob, ev)
+        return Point(u=u, p=float(z[-1] * prob.scale_p), xmax=ev.xmax, multipliers=mu,
+                     problem=prob, n_impacts=ev.n_impacts, jac=B, tangent=tn, corr=C)
+
+    def _tests(self, pt):
+        """Test functions (fold, period doubling, Neimark-Sacker) of a point: from its
+        multipliers, or without them the fold's alone, as the parameter component of the
+        tangent (it changes sign where the branch turns back)."""
+        if pt.multipliers is not None:
+            return test_functions(pt.multipliers)
+        return np.array([pt.tangent[-1], 0.0, 0.0])
 
     # --- one branch ---------------------------------------------------------------------------
-    def _tangent_at(self, prob, z, ev, t_ref):
-        r, J = _scaled(ev, prob.scale_u, prob.scale_p)
-        return tangent(J, t_ref)
-
     def trace(self, prob, u0, p0, direction=1, stop=None, t0=None):
         """Follow the branch through the solution (u0, p0) in the direction of increasing p
         (direction=1) or decreasing p (-1), or along t0 (scaled tangent) if given.
-        ``stop(point) -> bool`` ends the branch (the point is kept). The step adapts to the
-        angle between successive tangents (target ``max_angle / 2``) and to the corrector's
-        iterations. Where the number of impacts per period changes between two points (a
+        ``stop(point) -> bool`` ends the branch (the point is kept). The predictor follows the
+        secant through the last two points (the Jacobian's tangent at the first), and the step
+        adapts to the angle between successive secants (target ``max_angle / 2``; the secant
+        measures the branch's curvature even where the Jacobian is only approximate) and to
+        the corrector's iterations. Where the number of impacts per period changes between two points (a
         grazing orbit in between: the flow map has a square-root singularity there), the
         grazing point is bracketed; where the corrector fails repeatedly, the branch is
         continued by a natural-parameter step beyond the failure (``jump``) when the failed
         corrector's iterates changed the number of impacts (a grazing point ahead).
+        A branch that makes no progress (see the class doc) stops with a ContinuationWarning.
         Returns (points, located, reason)."""
         w, wp = prob.scale_u, prob.scale_p
         z = np.r_[np.asarray(u0) / w, p0 / wp]
@@ -158,24 +253,33 @@ class Tracer:
         self.n_evaluations += 1
         e_p = np.zeros(len(z))
         e_p[-1] = float(direction)
-        t = self._tangent_at(prob, z, ev, e_p if t0 is None else t0)
-        pts = [self._point(prob, z, ev)]
-        tfs = [test_functions(pts[0].multipliers)]
+        pt0 = self._point(prob, z, ev, e_p if t0 is None else t0)
+        t = pt0.tangent
+        pts = [pt0]
+        tfs = [self._tests(pt0)]
         located = []
         ds = self.ds0
         z_first = z.copy()
+        t_first = t.copy()
         reason = "max_points"
         n_fail = 0
         tried_jump = near_grazing = False
         ds_ok = ds
         self._creeps = 0
+        steps = []  # scaled arclength of each accepted step (the no-progress rule)
+        angle_rej = np.inf  # the angle of the last step rejected for its angle
         while len(pts) < self.max_points:
             jumped = False
             try:
-                zn, evn, iters = self.correct(prob, z + ds * t, t)
-                tn = self._tangent_at(prob, zn, evn, t)
+                zn, evn, iters = self.correct(prob, z + ds * t, t, pts[-1].corr)
+                ptn = self._point(prob, zn, evn, t)
+                tn = (zn - z) / np.linalg.norm(zn - z)  # secant: the next predictor
                 angle = float(np.arccos(np.clip(t @ tn, -1, 1)))
                 ok = angle <= self.max_angle
+                if ok and ptn.n_impacts != pts[-1].n_impacts and ds > self.grazing_ds:
+                    ok = False  # a grazing point ahead: approach it with short steps, so that
+                    # it is bracketed closely and the step does not cut a corner of the branch
+                    angle = np.nan
             except ConvergenceError:
                 ok = False
                 iters = self.max_iter
@@ -187,6 +291,12 @@ class Tracer:
                                                                  z[-1] * prob.scale_p))
             if not ok:
                 n_fail += 1
+                if np.isfinite(angle) and angle > 0.7 * angle_rej:
+                    # the angle does not shrink with the step: the predictor's direction (the
+                    # last secant) is off, e.g. after a corner; the short trial step's secant
+                    # is the local tangent
+                    t = tn
+                angle_rej = angle if np.isfinite(angle) else np.inf
                 ds *= 0.5
                 if (n_fail >= self.jump_after and near_grazing and not tried_jump
                         and self.jump_steps):
@@ -194,6 +304,8 @@ class Tracer:
                     res = self.jump(prob, pts[-1], t)
                     if res is not None:
                         zn, evn, tn = res
+                        ptn = self._point(prob, zn, evn, tn)  # tn: the Jacobian's tangent
+                        # (the secant across the jump is no tangent of the far side)
                         jumped = True
                         ds = ds_ok
                 if not jumped:
@@ -202,13 +314,14 @@ class Tracer:
                         break
                     continue
             tried_jump = near_grazing = False
+            angle_rej = np.inf
             if not jumped:
                 ds_ok = ds
             n_fail = 0
             if not jumped:
                 self._creeps = 0
-            pt = self._point(prob, zn, evn)
-            tf = test_functions(pt.multipliers)
+            pt = ptn
+            tf = self._tests(pt)
             prev = pts[-1]
             if pt.n_impacts != prev.n_impacts:
                 g = self.locate_grazing(prob, z, t, ds, prev, pt, jumped)
@@ -224,21 +337,35 @@ class Tracer:
                         if kind == "neimark-sacker" and not _has_pair_near_circle(
                                 pts[-1].multipliers, pt.multipliers):
                             continue
-                        loc = self.locate(prob, z, t, ds, k, tfs[-1][k], tf[k])
-                        if loc is not None:
-                            located.append(Located(kind, loc[0], loc[1], len(pts) - 1))
+                        loc = self.locate(prob, z, t, ds, k, tfs[-1][k], tf[k], prev.corr)
+                        if loc is None:  # not located: the bracket is the step
+                            loc = (pt, abs(pt.p - prev.p))
+                        located.append(Located(kind, loc[0], loc[1], len(pts) - 1))
+            steps.append(float(np.linalg.norm(zn - z)))
             pts.append(pt)
             tfs.append(tf)
             z, t = zn, tn
             if not (self.p_min <= pt.p <= self.p_max):
                 reason = "left the parameter range"
                 break
-            if len(pts) > 8 and np.linalg.norm(z - z_first) < 1.5 * ds:
+            if len(pts) > 8 and _passes(z_first, t_first, pts[-2], z, prob):
                 reason = "closed"
+                break
+            if (len(steps) >= self.progress_points
+                    and sum(steps[-self.progress_points:]) < self.progress_min):
+                reason = "no progress"
+                warnings.warn(
+                    f"continuation: the {self.label} made no progress near {pt.p:.9g} (its last "
+                    f"{self.progress_points} points advanced {sum(steps[-self.progress_points:]):.1e}"
+                    f" < {self.progress_min:.0e} in scaled arclength) and is stopped there. The "
+                    "flow map is probably not smooth there (grazing or chattering contacts, or "
+                    "an orbit too unstable for single shooting): try finer integration "
+                    "(dt_scale=0.5, steps_per_contact=64), multiple shooting (segments=4), or "
+                    "a smaller max_angle", ContinuationWarning, stacklevel=2)
                 break
             if not jumped:
                 fac = 0.5 * self.max_angle / max(angle, 1e-12)
-                if iters >= 5:
+                if iters >= 6:
                     fac = min(fac, 0.7)
                 ds = min(self.ds_max, ds * min(2.0, max(0.5, fac)))
             new = prob.adapt(pt.u, pt.p)
@@ -255,10 +382,14 @@ class Tracer:
                 z = np.r_[u2 / w, pt.p / wp]
                 ev2 = prob2.evaluate(u2, pt.p, jac=True, jac_p=True)
                 sec = z - z_prev_new
-                t = self._tangent_at(prob2, z, ev2, sec / np.linalg.norm(sec))
-                pts[-1] = self._point(prob2, z, ev2)
+                t = sec / np.linalg.norm(sec)
+                pts[-1] = self._point(prob2, z, ev2, t)
+                z1 = np.r_[prob2.transfer(pts[1].problem, pts[1].u, pts[1].p) / w,
+                           pts[1].p / wp] if len(pts) > 1 else None
                 z_first = np.r_[prob2.transfer(pts[0].problem, pts[0].u, pts[0].p) / w,
                                 pts[0].p / wp]
+                if z1 is not None:
+                    t_first = (z1 - z_first) / np.linalg.norm(z1 - z_first)
                 prob = prob2
         return pts, located, reason
 
@@ -278,35 +409,37 @@ class Tracer:
         e_p[-1] = sp
         same = None
 
-        def accept(u, p):
-            ev = prob.evaluate(u, p, jac=True, jac_p=True)
-            zn = np.r_[u / w, p / wp]
-            return zn, ev, self._tangent_at(prob, zn, ev, e_p)
+        def solve_at(u, p):
+            """The quasi-Newton corrector at fixed p (the bordering row fixes p)."""
+            zs, evs, _ = self.correct(prob, np.r_[u / w, p / wp], e_p, pt.corr)
+            return zs, evs
+
+        def accept(zs, evs):
+            return zs, evs, tangent(evs.B, e_p)
 
         for rel in self.jump_steps:
             dp = sp * rel
             guesses = [z[:-1] + t[:-1] / t[-1] * dp, z[:-1]] if abs(t[-1]) > 1e-3 else [z[:-1]]
             for g in guesses:
                 try:
-                    u, ev, res, it = prob.solve(g * w, (z[-1] + dp) * wp, tol=self.tol,
-                                                max_iter=self.max_iter + 4)
+                    zs, evs = solve_at(g * w, (z[-1] + dp) * wp)
                 except ConvergenceError:
                     continue
-                self.n_evaluations += it + 1
-                if np.max(np.abs(u / w - z[:-1])) > self.jump_max_distance:
+                if np.max(np.abs(zs[:-1] - z[:-1])) > self.jump_max_distance:
                     continue  # another branch
-                if ev.n_impacts != pt.n_impacts:
-                    return accept(u, (z[-1] + dp) * wp)
-                same = (u, (z[-1] + dp) * wp)
+                if evs.n_impacts != pt.n_impacts:
+                    return accept(zs, evs)
+                same = (zs, evs)
                 break
         if hasattr(prob, "settle"):
             p_new = (z[-1] + sp * self.jump_steps[-1]) * wp
             try:
-                u = prob.settle(pt.u, pt.p, p_new)
-                u, ev, _, _ = prob.solve(u, p_new, tol=self.tol, max_iter=self.max_iter + 4)
-                if (ev.n_impacts != pt.n_impacts and abs(ev.xmax - pt.xmax) < 0.1 * abs(pt.xmax)
-                        and np.max(np.abs(u / w - z[:-1])) < 10 * self.jump_max_distance):
-                    return accept(u, p_new)
+                u = prob.settle(pt.u, pt.p, p_new, efolds=4.0)
+                zs, evs = solve_at(u, p_new)
+                if (evs.n_impacts != pt.n_impacts
+                        and abs(evs.xmax - pt.xmax) < 0.1 * abs(pt.xmax)
+                        and np.max(np.abs(zs[:-1] - z[:-1])) < 10 * self.jump_max_distance):
+                    return accept(zs, evs)
             except ConvergenceError:
                 pass
         if same is not None and self._creeps < 3:
@@ -324,41 +457,43 @@ class Tracer:
             u_lo, u_hi = pa.u, pb.u
             for _ in range(self.grazing_iter):
                 pm = 0.5 * (lo_p + hi_p)
+                e_p = np.zeros(len(u_lo) + 1)
+                e_p[-1] = 1.0
                 try:
-                    u, ev, _, _ = prob.solve(u_lo, pm, tol=self.tol)
+                    zs, ev, _ = self.correct(prob, np.r_[u_lo / w, pm / wp], e_p, pa.corr)
                 except ConvergenceError:
                     hi_p = pm  # no solution continuing the near side: beyond the grazing point
                     continue
-                q = self._point(prob, np.r_[u / w, pm / wp], ev)
+                u = zs[:-1] * w
+                q = self._point(prob, zs, ev)
                 if q.n_impacts == pa.n_impacts:
                     lo_p, u_lo = pm, u
                 else:
                     hi_p, u_hi, best = pm, u, q
-            return best, abs(hi_p - lo_p)
+            return best, abs(best.p - lo_p)  # the reported point to the near side
         lo, hi = 0.0, ds
         for _ in range(self.grazing_iter):
             s = 0.5 * (lo + hi)
             try:
-                zs, evs, _ = self.correct(prob, z_a + s * t_a, t_a)
+                zs, evs, _ = self.correct(prob, z_a + s * t_a, t_a, pa.corr)
             except ConvergenceError:
                 break
-            q = self._point(prob, zs, evs)
+            q = self._point(prob, zs, evs, t_a)
             if q.n_impacts == pa.n_impacts:
                 lo, lo_p = s, q.p
             else:
                 hi, hi_p, best = s, q.p, q
             if abs(hi_p - lo_p) <= self.bif_tol * abs(hi_p) * 10:
                 break
-        return best, abs(hi_p - lo_p)
+        return best, abs(best.p - lo_p)
 
     # --- bifurcation location -----------------------------------------------------------------
-    def locate(self, prob, z_a, t_a, ds, k, g_a, g_b):
+    def locate(self, prob, z_a, t_a, ds, k, g_a, g_b, C_a=None):
         """Illinois regula falsi on the arclength step from z_a (test function k), until the
         bracket's width in p is below bif_tol * |p|. Returns (Point, tolerance) or None."""
         lo, hi = 0.0, ds
         glo, ghi = g_a, g_b
         p_lo = z_a[-1] * prob.scale_p
-        zb, _, _ = None, None, None
         best = None
         p_hi = None
         side = 0
@@ -367,11 +502,11 @@ class Tracer:
             if not (lo < s < hi):
                 s = 0.5 * (lo + hi)
             try:
-                zs, evs, _ = self.correct(prob, z_a + s * t_a, t_a)
+                zs, evs, _ = self.correct(prob, z_a + s * t_a, t_a, C_a)
             except ConvergenceError:
                 return None
-            pt = self._point(prob, zs, evs)
-            g = test_functions(pt.multipliers)[k]
+            pt = self._point(prob, zs, evs, t_a)
+            g = self._tests(pt)[k]
             best = pt
             if np.sign(g) == np.sign(glo):
                 lo, glo, p_lo = s, g, pt.p
@@ -390,6 +525,20 @@ class Tracer:
                 break
         tol = abs(p_hi - p_lo) if p_hi is not None else np.inf
         return best, tol
+
+
+def _passes(z_first, t_first, prev, z, prob):
+    """True when the step from the point ``prev`` to z (scaled, in prob's unknowns) passes
+    the branch's first point z_first in its first direction t_first: the branch has closed."""
+    if prev.problem is not prob:
+        return False
+    za = np.r_[prev.u / prob.scale_u, prev.p / prob.scale_p]
+    d = z - za
+    L = float(np.linalg.norm(d))
+    if L == 0.0 or d @ t_first < 0.8 * L:
+        return False
+    lam = float(np.clip((z_first - za) @ d / (L * L), 0.0, 1.0))
+    return float(np.linalg.norm(za + lam * d - z_first)) < 0.1 * L + 1e-9
 
 
 def _has_pair_near_circle(mu_a, mu_b):

@@ -89,7 +89,8 @@ class ShootingProblem:
     """
 
     def __init__(self, model, amplitude, frequency, order, boundaries, integrator,
-                 parameter="frequency", steps_per_period=None, scale_u=None, scale_p=None):
+                 parameter="frequency", steps_per_period=None, scale_u=None, scale_p=None,
+                 variational=True):
         self.base_model = model
         self.amplitude = float(amplitude)
         self.frequency = float(frequency)
@@ -110,6 +111,8 @@ class ShootingProblem:
         self.scale_u = scale_u
         self.scale_p = float(scale_p) if scale_p is not None else max(abs(p0), 1e-300)
         self.sel_clearance = None
+        # False: no variational equations (no multipliers; Jacobians by differences / secants)
+        self.variational = bool(variational)
 
     # --- parameters ---------------------------------------------------------------------------
     def value(self):
@@ -158,7 +161,9 @@ class ShootingProblem:
                                    "or a better guess") from None
 
     def _map(self, U, p, mono):
-        """Flows of all segments at parameter p: (ends (m, 2N), [monodromies], xmax)."""
+        """Flows of all segments at parameter p: (ends (m, 2N), [monodromies], xmax).
+        mono: the segment monodromies from the variational equations, or (for a problem with
+        ``variational = False``) dR/du by forward differences; [] without."""
         try:
             model, A, f = self.setup(p)
             ex = nlbeam.Harmonic(A, f)
@@ -169,12 +174,13 @@ class ShootingProblem:
         xm = 0.0
         n_imp = 0
         N = model.n_dof
+        var = mono and self.variational
         for j, t0, dur, dt in self._segments(f):
-            fl = self._flow(model, ex, U[j], t0, dur, dt, mono)
+            fl = self._flow(model, ex, U[j], t0, dur, dt, var)
             ends[j] = fl.state
             n_imp += fl.n_impacts
             xm = max(xm, float(fl.xmax[self.out]))
-            if mono:
+            if var:
                 M = fl.monodromy
                 if fl.dstate_dvminus0 is not None:
                     # started inside a contact: the memory was taken as the penetration rate
@@ -183,31 +189,65 @@ class ShootingProblem:
                     D[:, N:] = model.element_geometry()[1]
                     M = M + fl.dstate_dvminus0 @ D
                 Ms.append(M)
+            elif mono:
+                # forward differences of the segment's flow (relative step 1e-7 of the scale)
+                sc = self.scale_u if self.scale_u is not None else self.make_scale(U.ravel(), p)
+                M = np.empty((self.N2, self.N2))
+                for k in range(self.N2):
+                    h = 1e-7 * sc[j * self.N2 + k]
+                    s1 = U[j].copy()
+                    s1[k] += h
+                    M[:, k] = (self._flow(model, ex, s1, t0, dur, dt, False).state
+                               - fl.state) / h
+                Ms.append(M)
         self.last_impacts = n_imp
         return ends, Ms, xm
 
     def evaluate(self, u, p, jac=True, jac_p=True):
         """Residual R (n,) of u (n,) at parameter p; with jac the Jacobian dR/du (n, n) and the
-        monodromies of the segments; with jac_p dR/dp (n,) by a forward difference (it only
-        steers Newton and the predictor; the solution does not depend on it)."""
+        segment monodromies (from the variational equations; by forward differences for a
+        problem with ``variational = False``, whose evaluations then carry no monodromies:
+        ``Ms`` is []); with jac_p dR/dp (n,) by a forward difference (it only steers Newton
+        and the predictor; the solution does not depend on it)."""
         U = np.asarray(u, dtype=float).reshape(self.n_seg, self.N2)
         ends, Ms, xm = self._map(U, p, jac)
         n_imp = self.last_impacts
         R = (ends - np.roll(U, -1, axis=0)).ravel()
-        Ju = None
-        if jac:
-            Ju = np.zeros((self.n, self.n))
-            k = self.N2
-            for j in range(self.n_seg):
-                Ju[j * k:(j + 1) * k, j * k:(j + 1) * k] += Ms[j]
-                jn = (j + 1) % self.n_seg
-                Ju[j * k:(j + 1) * k, jn * k:(jn + 1) * k] -= np.eye(k)
-        Jp = None
-        if jac_p:
-            h = 1e-7 * self.scale_p
-            e_hi = self._map(U, p + h, False)[0]
-            Jp = ((e_hi - ends) / h).ravel()
-        return Evaluation(R, Ju, Jp, Ms, xm, n_imp)
+        Ju = self._assemble(Ms) if jac else None
+        Jp = self._jac_p(U, p, ends) if jac_p else None
+        return Evaluation(R, Ju, Jp, Ms if self.variational else [], xm, n_imp)
+
+    def _assemble(self, Ms):
+        Ju = np.zeros((self.n, self.n))
+        k = self.N2
+        for j in range(self.n_seg):
+            Ju[j * k:(j + 1) * k, j * k:(j + 1) * k] += Ms[j]
+            jn = (j + 1) % self.n_seg
+            Ju[j * k:(j + 1) * k, jn * k:(jn + 1) * k] -= np.eye(k)
+        return Ju
+
+    def _jac_p(self, U, p, ends):
+        h = 1e-7 * self.scale_p
+        e_hi = self._map(U, p + h, False)[0]
+        return ((e_hi - ends) / h).ravel()
+
+    def jacobian_u(self, u, p, ev=None):
+        """dR/du (n, n) at (u, p) by forward differences (no variational equations)."""
+        U = np.asarray(u, dtype=float).reshape(self.n_seg, self.N2)
+        var, self.variational = self.variational, False
+        try:
+            return self._assemble(self._map(U, p, True)[1])
+        finally:
+            self.variational = var
+
+    def jacobian_p(self, u, p, ev=None):
+        """dR/dp (n,) at (u, p) by a forward difference (ev: the evaluation at (u, p), if any)."""
+        U = np.asarray(u, dtype=float).reshape(self.n_seg, self.N2)
+        if ev is None:
+            ends = self._map(U, p, False)[0]
+        else:
+            ends = ev.R.reshape(self.n_seg, self.N2) + np.roll(U, -1, axis=0)
+        return self._jac_p(U, p, ends)
 
     # --- derived quantities -----------------------------------------------------------------
     def monodromy(self, Ms):
@@ -304,7 +344,7 @@ class ShootingProblem:
                               self.amplitude, f if self.parameter == "frequency" else
                               self.frequency, self.order, ph, self.integrator,
                               parameter=self.parameter, steps_per_period=spp,
-                              scale_p=self.scale_p)
+                              scale_p=self.scale_p, variational=self.variational)
         unew = S[idx].ravel()
         new.scale_u = new.make_scale(unew, p)
         new.sel_clearance = c[idx] if np.isfinite(c[0]) else None
@@ -323,7 +363,7 @@ class ShootingProblem:
         except nlbeam.IntegrationError as exc:
             raise ConvergenceError(f"settle: integration failed ({exc})") from None
         tmp = ShootingProblem(self.base_model, A, p_new, self.order, [0.0], self.integrator,
-                              steps_per_period=self.steps_per_period)
+                              steps_per_period=self.steps_per_period, variational=False)
         return self.transfer(tmp, s, p_new)
 
     def needs_rephase(self, u, p):
@@ -395,6 +435,8 @@ class Evaluation:
     Ms: list
     xmax: float
     n_impacts: int = 0  # contact onsets over the period
+    B: np.ndarray | None = None  # scaled [dR/du | dR/dp] of the quasi-Newton corrector
+    C: np.ndarray | None = None  # its secant correction (continuation.pathfollow.Tracer.correct)
 
 
 @dataclass
