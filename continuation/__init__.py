@@ -7,7 +7,7 @@ extrapolation), ``load``. Plotting lives in
 ``continuation.plot`` (imports matplotlib); HDF5 I/O imports h5py only when called.
 Units: Hz, m (N for force excitation), s.
 """
-from ._newton import ConvergenceError
+from ._newton import ContinuationWarning, ConvergenceError
 from .diagram import (Bifurcation, Branch, FrequencyResponse, Superharmonic,
                       continue_parameter, frequency_response, load)
 from .refine import Refined, refine, refine_bifurcations
@@ -15,5 +15,5 @@ from .shooting import Integrator, PeriodicSolution, periodic_solution
 
 __all__ = ["periodic_solution", "frequency_response", "continue_parameter", "load",
            "PeriodicSolution", "FrequencyResponse", "Branch", "Bifurcation", "Superharmonic",
-           "Integrator", "ConvergenceError", "refine", "refine_bifurcations",
+           "Integrator", "ConvergenceError", "ContinuationWarning", "refine", "refine_bifurcations",
            "Refined"]

@@ -20,7 +20,8 @@ from .shooting import (Integrator, ShootingProblem, _problem_from_state, decay_r
 class Branch:
     """One traced branch (n points). order: period = order / f. parameter: the continued
     parameter's name, values (n,) its values; frequency (n,) Hz, amplitude (n,); xmax (n,) m;
-    stable (n,) bool; multipliers (n, 2N) complex (largest modulus first); state0 (n, 2N) the
+    stable (n,) bool; multipliers (n, 2N) complex (largest modulus first), both None when the
+    diagram was computed with stability=False (stability unknown); state0 (n, 2N) the
     state at t = 0; states (n, m, 2N) at the shooting boundaries, boundaries (n, m) their
     excitation phases (periods); origin: 'brute-force', 'period-doubling' or 'start'."""
 
@@ -47,7 +48,7 @@ class Bifurcation:
     (width of the final bracket in the parameter; it does not include the integrator's error,
     see docs/continuation_report.md for the convergence under step refinement); xmax (m);
     order of the branch it lies on; branch index; multipliers (for a grazing point: those of
-    the branch point on the far side of the bracket)."""
+    the branch point on the far side of the bracket; None without stability)."""
 
     kind: str
     frequency: float
@@ -119,7 +120,8 @@ class FrequencyResponse:
                     gb.attrs["origin"] = b.origin
                     for name in ("values", "frequency", "amplitude", "xmax", "stable",
                                  "multipliers", "state0", "states", "boundaries"):
-                        gb.create_dataset(name, data=np.asarray(getattr(b, name)))
+                        if getattr(b, name) is not None:  # stable, multipliers: None without
+                            gb.create_dataset(name, data=np.asarray(getattr(b, name)))
                 gf = h.create_group("bifurcations")
                 bif = self.bifurcations
                 gf.create_dataset("kind", data=np.array([b.kind for b in bif], dtype="S16"))
@@ -127,10 +129,12 @@ class FrequencyResponse:
                              "integrator_error"):
                     gf.create_dataset(name, data=np.array([getattr(b, name) for b in bif],
                                                           dtype=float))
-                n2 = max([len(b.multipliers) for b in bif], default=0)
-                mu = np.zeros((len(bif), n2), dtype=complex)
+                n2 = max([len(b.multipliers) for b in bif if b.multipliers is not None],
+                         default=0)
+                mu = np.full((len(bif), n2), np.nan, dtype=complex)  # NaN: not computed
                 for i, b in enumerate(bif):
-                    mu[i, :len(b.multipliers)] = b.multipliers
+                    if b.multipliers is not None:
+                        mu[i, :len(b.multipliers)] = b.multipliers
                 gf.create_dataset("multipliers", data=mu)
                 n2 = max([len(b.state0) for b in bif if b.state0 is not None], default=0)
                 st = np.full((len(bif), n2), np.nan)
@@ -164,15 +168,18 @@ def load(path):
             frc.branches.append(Branch(
                 order=int(gb.attrs["order"]), parameter=s(gb.attrs["parameter"]),
                 origin=s(gb.attrs["origin"]),
-                **{n: gb[n][()] for n in ("values", "frequency", "amplitude", "xmax", "stable",
-                                          "multipliers", "state0", "states", "boundaries")}))
+                **{n: gb[n][()] if n in gb else None
+                   for n in ("values", "frequency", "amplitude", "xmax", "stable",
+                             "multipliers", "state0", "states", "boundaries")}))
         gf = h["bifurcations"]
         for i in range(len(gf["kind"])):
             frc.bifurcations.append(Bifurcation(
                 kind=gf["kind"][i].decode(), frequency=float(gf["frequency"][i]),
                 value=float(gf["value"][i]), xmax=float(gf["xmax"][i]),
                 order=int(gf["order"][i]), branch=int(gf["branch"][i]),
-                tolerance=float(gf["tolerance"][i]), multipliers=gf["multipliers"][i],
+                tolerance=float(gf["tolerance"][i]),
+                multipliers=None if np.all(np.isnan(gf["multipliers"][i]))
+                and gf["multipliers"].shape[1] else gf["multipliers"][i],
                 integrator_error=float(gf["integrator_error"][i]) if "integrator_error" in gf
                 else float("nan"),
                 state0=gf["state0"][i]))
@@ -197,10 +204,14 @@ def _to_branch(points, order, parameter, origin):
         m, A, f = pt.problem.setup(pt.p)
         freq[i], amp[i] = f, A
         st0.append(pt.problem.state_at_zero(pt.u, pt.p)[0])
-    mu = np.array([p.multipliers for p in points])
+    if any(p.multipliers is None for p in points):  # stability not computed
+        mu = stable = None
+    else:
+        mu = np.array([p.multipliers for p in points])
+        stable = np.abs(mu[:, 0]) < 1.0
     return Branch(order=order, parameter=parameter, values=values, frequency=freq, amplitude=amp,
                   xmax=np.array([p.xmax for p in points]),
-                  stable=np.abs(mu[:, 0]) < 1.0, multipliers=mu, state0=np.array(st0),
+                  stable=stable, multipliers=mu, state0=np.array(st0),
                   states=np.array([p.u.reshape(pr.n_seg, pr.N2) for p, pr in zip(points, probs)]),
                   boundaries=np.array([pr.boundaries for pr in probs]), origin=origin)
 
@@ -218,25 +229,6 @@ def _both_ways(tracer, prob, u, p, stop=None):
     for L in loc_f:
         L.index += nb - 1
     return pts, loc_b + loc_f
-
-
-def _minimal_order(prob, u, p, tol=1e-6):
-    """The smallest k dividing the order such that the orbit repeats after k / f."""
-    n = prob.order
-    model, A, f = prob.setup(p)
-    U = np.asarray(u).reshape(prob.n_seg, prob.N2)
-    w = prob.scale_u[:prob.N2]
-    for k in range(1, n):
-        if n % k:
-            continue
-        fl = nlbeam.flow(model, nlbeam.Harmonic(A, f), U[0], prob.boundaries[0] / f, k / f,
-                         method=prob.integrator.method, rtol=prob.integrator.rtol,
-                         atol=prob.integrator.atol,
-                         dt=1.0 / (f * prob.steps_per_period) if prob.steps_per_period else None,
-                     warn=False)
-        if np.max(np.abs(fl.state - U[0]) / w) < tol:
-            return k
-    return n
 
 
 def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=1e-3):
@@ -427,7 +419,7 @@ def _same_point(a, b, rel=1e-6):
 
 
 def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer, integrator,
-                 segments, n_grid, switch, starts, brute):
+                 segments, n_grid, switch, starts, brute, variational=True):
     branches, bifs, pd_points = [], [], []
     t_start = time.perf_counter()
     cand = []
@@ -460,7 +452,8 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
             pval = f if parameter == "frequency" else None
             try:
                 prob, u0 = _problem_from_state(model, A, f if parameter == "frequency"
-                                               else frequency, order, s0, segments, integrator)
+                                               else frequency, order, s0, segments, integrator,
+                                               variational=variational)
                 if parameter != "frequency":
                     prob.parameter = parameter
                     prob.scale_p = max(abs(prob.value()), 1e-300)
@@ -468,12 +461,13 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                 sol_prob, u, p = _polish(prob, u0, pval, tracer.tol)
             except ConvergenceError:
                 continue
-            if _minimal_order(sol_prob, u, p) != order:
+            if sol_prob.minimal_order(u, p) != order:
                 continue
             ev = sol_prob.evaluate(u, p, jac=False, jac_p=False)
             if _on_branch(branches, order, f, ev.xmax,
                           lambda: _shifted_states(sol_prob, u, p)) is not None:
                 continue
+            tracer.label = f"order-{order} branch (from {f:.6g} Hz)"
             pts, loc = _both_ways(tracer, sol_prob, u, p, stop=_overlap_stop(branches, order))
             add(pts, loc, order, "brute-force" if len(starts) == 0 or (f, n, s0) not in starts
                 else "start")
@@ -483,6 +477,8 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                 if o != order or k in handled:
                     continue
                 handled.add(k)
+                tracer.label = (f"order-{2 * order} branch (from the period doubling at "
+                                f"{pt.p:.6g})")
                 res = _trace_switched(tracer, pt, order, branches)
                 if res is None:
                     continue
@@ -569,7 +565,7 @@ def _superharmonics(branches, model, integrator, orders=(2, 3), window=0.15, min
 def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30, segments=1,
                        integrator=None, switch=True, brute_force_grid=True, starts=(),
                        ds=0.02, ds_max=0.5, max_angle=0.2, max_points=1000, tol=1e-10,
-                       bif_tol=1e-8, **integrator_kw):
+                       bif_tol=1e-8, stability=True, **integrator_kw):
     """The |x|max-versus-frequency diagram at excitation amplitude (m, or N for force).
 
     f_range: (f_lo, f_hi) Hz. Branches of each order in ``orders`` start from periodic
@@ -579,7 +575,13 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
     max_angle rad between tangents) until it leaves f_range or closes. Folds, period doublings
     and Neimark-Sacker points are located to a bracket of bif_tol relative width in f.
     starts: extra (frequency, order, state at t = 0) starting points.
-    Returns a FrequencyResponse.
+    stability=False: no variational equations and no Floquet multipliers (quasi-Newton
+    corrector from forward differences and secant updates): every branch has ``stable`` and
+    ``multipliers`` None (stability unknown), folds are still passed and located (where the
+    tangent turns back in frequency), but period doublings and Neimark-Sacker points are not
+    detected, so orders > 1 come from the brute-force grid only. xmax is the same as with
+    stability (the same discrete orbits).
+    Returns a FrequencyResponse (``settings['stability']`` says which).
     """
     integrator = integrator or Integrator(**integrator_kw)
     f_lo, f_hi = map(float, f_range)
@@ -590,14 +592,16 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
                     max_points=max_points, tol=tol, bif_tol=bif_tol)
     t0 = time.perf_counter()
     branches, bifs, _ = _run_diagram(model, amplitude, (f_lo, f_hi), orders, "frequency", None,
-                                     tracer, integrator, segments, n_grid, switch, list(starts),
-                                     brute_force_grid)
+                                     tracer, integrator, segments, n_grid,
+                                     switch and stability, list(starts), brute_force_grid,
+                                     variational=stability)
     sup = _superharmonics(branches, model, integrator)
     frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=float(amplitude),
                             parameter="frequency", p_range=(f_lo, f_hi), branches=branches,
                             bifurcations=bifs, superharmonics=sup,
-                            settings=_settings(integrator, segments, n_grid, ds, ds_max,
-                                               max_angle, tol, bif_tol, orders))
+                            settings=dict(_settings(integrator, segments, n_grid, ds, ds_max,
+                                                    max_angle, tol, bif_tol, orders),
+                                          stability=int(bool(stability))))
     frc.wall_time = time.perf_counter() - t0
     frc.n_points = int(sum(len(b.values) for b in branches))
     return frc

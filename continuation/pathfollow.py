@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._newton import ConvergenceError
+from ._newton import ContinuationWarning, ConvergenceError
 
 KINDS = ("fold", "period-doubling", "neimark-sacker")  # from the test functions
 
@@ -57,10 +57,6 @@ def test_functions(mu):
 def _scaled(ev, w, wp):
     J = np.hstack([ev.Ju * w[None, :], (ev.Jp * wp)[:, None]]) / w[:, None]
     return ev.R / w, J
-
-
-class ContinuationWarning(UserWarning):
-    """A branch was stopped early (no progress); the message says where and what to change."""
 
 
 def tangent(J, t_prev):
@@ -125,23 +121,23 @@ class Tracer:
         w = prob.scale_u
         n = len(w)
         B = np.zeros((n, n + 1))
-        if ev.Ju is not None:
+        if ev.Ju is not None and getattr(prob, "variational", True):
             B[:, :n] = ev.Ju * w[None, :] / w[:, None]
         return B
 
     def _correction(self, prob, z, ev, C_prev):
-        """The secant correction to start from: the previous point's (or, at a first point,
-        without variational equations, dR/du by forward differences), with dR/dp by a forward
-        difference at z."""
+        """The secant correction to start from: zero (or, without variational equations,
+        dR/du by forward differences), with dR/dp by a forward difference at z. (C_prev is
+        not used: a carried correction went stale over a step.)"""
         w, wp = prob.scale_u, prob.scale_p
         n = len(w)
-        if C_prev is not None and ev.Ju is None:
-            C = C_prev.copy()
-        else:
-            C = np.zeros((n, n + 1))
-            if ev.Ju is None:
-                C[:, :n] = prob.jacobian_u(z[:-1] * w, z[-1] * wp, ev) * w[None, :] / w[:, None]
-                self.n_evaluations += n
+        C = np.zeros((n, n + 1))
+        if not getattr(prob, "variational", True):
+            # forward differences at every corrector start: Broyden updates alone, carried from
+            # point to point, drift (spurious folds, creeping); n flows without variational
+            # equations cost about what the variational equations would
+            C[:, :n] = prob.jacobian_u(z[:-1] * w, z[-1] * wp, ev) * w[None, :] / w[:, None]
+            self.n_evaluations += n
         # dR/dp changes fastest along a branch: a fresh forward difference (one flow without
         # variational equations) saves more iterations than it costs
         C[:, n] = prob.jacobian_p(z[:-1] * w, z[-1] * wp, ev) * wp / w
@@ -503,6 +499,13 @@ class Tracer:
                 s = 0.5 * (lo + hi)
             try:
                 zs, evs, _ = self.correct(prob, z_a + s * t_a, t_a, C_a)
+                if not getattr(prob, "variational", True):
+                    # the fold's test function is the tangent's p-component: from the Jacobian
+                    # at the solution itself (the corrector's is the predictor's, updated), or
+                    # the fold moves by ~1e-5
+                    evs = prob.evaluate(zs[:-1] * prob.scale_u, zs[-1] * prob.scale_p,
+                                        jac=True, jac_p=True)
+                    self.n_evaluations += len(zs) + 1
             except ConvergenceError:
                 return None
             pt = self._point(prob, zs, evs, t_a)

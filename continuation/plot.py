@@ -9,7 +9,8 @@ _COLOURS = {1: "C0", 2: "C3", 3: "C2", 4: "C1", 6: "C4"}
 
 
 def plot_frequency_response(frc, ax=None, *, scale=1e3, unit="mm", grazing=True):
-    """|x|max against frequency: stable solid, unstable dashed, one colour per order,
+    """|x|max against frequency: stable solid, unstable dashed (all solid for a diagram computed
+    with stability=False), one colour per order,
     bifurcations marked (folds circles, period doublings squares, Neimark-Sacker triangles,
     grazing points small crosses unless ``grazing=False``), superharmonic resonances labelled
     with their order. Returns the Axes."""
@@ -21,6 +22,8 @@ def plot_frequency_response(frc, ax=None, *, scale=1e3, unit="mm", grazing=True)
     for b in frc.branches:
         c = _COLOURS.get(b.order, "k")
         x, y, s = b.values, b.xmax * scale, b.stable
+        if s is None:  # computed with stability=False: stability unknown, drawn solid
+            s = np.ones(len(x), dtype=bool)
         cuts = np.nonzero(np.diff(s.astype(int)))[0] + 1
         for seg in np.split(np.arange(len(x)), cuts):
             if seg.size == 0:
@@ -48,7 +51,8 @@ def plot_frequency_response(frc, ax=None, *, scale=1e3, unit="mm", grazing=True)
     ax.set_xlim(*frc.p_range)
     ax.set_xlabel("excitation frequency [Hz]" if frc.parameter == "frequency" else frc.parameter)
     ax.set_ylabel(f"|x|max [{unit}]")
+    known = all(b.stable is not None for b in frc.branches)
     ax.set_title(f"periodic solutions, base amplitude {frc.amplitude * scale:g} {unit} "
-                 "(solid stable, dashed unstable)")
+                 + ("(solid stable, dashed unstable)" if known else "(stability not computed)"))
     ax.legend(fontsize=8, loc="upper right")
     return ax

@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 import nlbeam
 
-from ._newton import ConvergenceError, newton
+from ._newton import ConvergenceError, ContinuationWarning, newton
 
 # steps per excitation period of the fixed-step methods at the nlbeam default dt (f >= f_n)
 _BASE_STEPS = {"rk2": 400, "rk4": 100}
@@ -157,8 +158,10 @@ class ShootingProblem:
                                atol=it.atol, max_steps=int(50 * dur / dt) + 20000, warn=False)
         except nlbeam.IntegrationError as exc:
             # an iterate far from any orbit (e.g. a huge penetration): a failed Newton step
-            raise ConvergenceError(f"shooting: integration failed ({exc}); try a smaller step "
-                                   "or a better guess") from None
+            raise ConvergenceError(f"shooting: integration failed ({exc}); try a smaller step, "
+                                   "a better guess, or for a strongly unstable orbit multiple "
+                                   "shooting (segments=8 or more, guess=states at the "
+                                   "boundaries)") from None
 
     def _map(self, U, p, mono):
         """Flows of all segments at parameter p: (ends (m, 2N), [monodromies], xmax).
@@ -277,19 +280,46 @@ class ShootingProblem:
         return np.tile(np.r_[np.full(N, a), np.full(N, a * w)], self.n_seg)
 
     def solve(self, u0, p, tol=1e-10, max_iter=12):
-        """Newton at fixed p. Returns (u, evaluation, residual, iterations)."""
+        """Newton at fixed p (quasi-Newton for a problem without variational equations).
+        Returns (u, evaluation, residual, iterations)."""
         if self.scale_u is None:
             self.scale_u = self.make_scale(u0, p)
         w = self.scale_u
+        last = {}
 
         def fun(z):
-            ev = self.evaluate(z * w, p, jac=True, jac_p=False)
+            ev = last["ev"] = self.evaluate(z * w, p, jac=True, jac_p=False)
             return ev.R / w, ev.Ju * w[None, :] / w[:, None]
 
+        def residual(z):
+            ev = last["ev"] = self.evaluate(z * w, p, jac=False, jac_p=False)
+            return ev.R / w
+
         z, res, it = newton(fun, np.asarray(u0) / w, tol=tol, max_iter=max_iter,
-                            what=f"shooting (order {self.order}, {self.parameter} = {p:.9g})")
-        u = z * w
-        return u, self.evaluate(u, p, jac=True, jac_p=False), res, it
+                            what=f"shooting (order {self.order}, {self.parameter} = {p:.9g})",
+                            residual=None if self.variational else residual)
+        return z * w, last["ev"], res, it
+
+    def minimal_order(self, u, p, tol=1e-6):
+        """The smallest k dividing the order such that the orbit u repeats after k excitation
+        periods (to ``tol`` in units of the scales): the order it really has."""
+        n = self.order
+        model, A, f = self.setup(p)
+        U = np.asarray(u).reshape(self.n_seg, self.N2)
+        w = self.scale_u[:self.N2] if self.scale_u is not None else \
+            self.make_scale(u, p)[:self.N2]
+        it = self.integrator
+        for k in range(1, n):
+            if n % k:
+                continue
+            fl = nlbeam.flow(model, nlbeam.Harmonic(A, f), U[0], self.boundaries[0] / f, k / f,
+                             method=it.method, rtol=it.rtol, atol=it.atol,
+                             steps_per_contact=it.steps_per_contact,
+                             dt=1.0 / (f * self.steps_per_period) if self.steps_per_period
+                             else None, warn=False)
+            if np.max(np.abs(fl.state - U[0]) / w) < tol:
+                return k
+        return n
 
     # --- boundaries ---------------------------------------------------------------------------
     def trajectory(self, u, p, n_samples=None):
@@ -449,7 +479,9 @@ class PeriodicSolution:
     multipliers (2N,) complex, sorted by modulus, largest first (None if not asked);
     stable: all |multiplier| < 1; residual: max-norm of the scaled shooting residual;
     iterations: Newton iterations; boundaries: the excitation phases (periods) of the shooting
-    segments; states (m, 2N): the states there; monodromy (2N, 2N) at the first boundary."""
+    segments; states (m, 2N): the states there; monodromy (2N, 2N) at the first boundary;
+    minimal_order: the number of excitation periods after which the orbit repeats (< order
+    when Newton found an orbit of lower order, e.g. a period-1 orbit for order 2)."""
 
     state0: np.ndarray
     disc0: np.ndarray | None
@@ -465,6 +497,7 @@ class PeriodicSolution:
     boundaries: np.ndarray
     states: np.ndarray
     monodromy: np.ndarray | None
+    minimal_order: int = 1
 
 
 def decay_rate(model):
@@ -492,9 +525,11 @@ def steady_state(model, amplitude, frequency, *, x0=None, efolds=8.0, min_period
     return tr.state_end
 
 
-def _problem_from_state(model, amplitude, frequency, order, state0, segments, integrator):
+def _problem_from_state(model, amplitude, frequency, order, state0, segments, integrator,
+                        variational=True):
     """A shooting problem with boundaries in free flight, from a state at t = 0."""
-    base = ShootingProblem(model, amplitude, frequency, order, [0.0], integrator)
+    base = ShootingProblem(model, amplitude, frequency, order, [0.0], integrator,
+                           variational=variational)
     return base.rephased(np.asarray(state0, dtype=float), frequency, n_seg=segments)
 
 
@@ -503,11 +538,18 @@ def periodic_solution(model, amplitude, frequency, order=1, guess=None, *, segme
     """Periodic solution of order n (period n / frequency) by (multiple) shooting.
 
     amplitude: m (base excitation) or N (force); frequency: Hz. guess: state at t = 0 (2N,) or
-    a PeriodicSolution; without it the model is integrated to a steady state first.
+    a PeriodicSolution (boundaries then placed from an integration of one period from it), or
+    the states at the segment boundaries, (segments, 2N) at excitation phases j order /
+    segments (for strongly unstable orbits, which an integration from a guess leaves); without
+    a guess the model is integrated to a steady state first.
     segments: shooting segments per period (multiple shooting). Newton's Jacobian holds the
-    monodromies from the variational equations. stability=False skips the multipliers.
+    monodromies from the variational equations. stability=False integrates no variational
+    equations (Newton's Jacobian by forward differences once, then Broyden updates): no
+    multipliers, ``stable`` and ``monodromy`` are None.
     Integrator options (method, dt_scale, steps_per_contact, rtol, atol) may be passed as
     keywords or as an ``Integrator``. Raises ConvergenceError when Newton does not converge.
+    For order > 1 the orbit found may repeat after fewer excitation periods (a period-1 orbit
+    solves the period-2 problem too): ``minimal_order`` says, and a ContinuationWarning.
     """
     if integrator is None:
         integrator = Integrator(**integrator_kw)
@@ -517,6 +559,20 @@ def periodic_solution(model, amplitude, frequency, order=1, guess=None, *, segme
         raise ValueError(f"order: must be an integer >= 1, got {order!r}")
     if int(segments) != segments or segments < 1:
         raise ValueError(f"segments: must be an integer >= 1, got {segments!r}")
+    if guess is not None and np.ndim(guess) == 2:
+        # states at the segment boundaries (equally spaced phases): no integration from a
+        # guess, which for a strongly unstable orbit would run away
+        U = np.asarray(guess, dtype=float)
+        if U.shape != (segments, 2 * model.n_dof):
+            raise ValueError(f"guess: states at the boundaries must have shape ({segments}, "
+                             f"{2 * model.n_dof}), got {U.shape}")
+        prob = ShootingProblem(model, amplitude, frequency, order,
+                               np.arange(segments) * order / segments, integrator,
+                               variational=stability)
+        prob.scale_u = prob.make_scale(U.ravel(), frequency)
+        sol = solve_problem(prob, U.ravel(), frequency, tol=tol, max_iter=max_iter,
+                            stability=stability)
+        return _check_order(sol, frequency)
     if guess is None:
         s0 = steady_state(model, amplitude, frequency, integrator=integrator)
     elif isinstance(guess, PeriodicSolution):
@@ -526,9 +582,22 @@ def periodic_solution(model, amplitude, frequency, order=1, guess=None, *, segme
         if s0.shape != (2 * model.n_dof,):
             raise ValueError(f"guess: must be a state of length {2 * model.n_dof} or a "
                              "PeriodicSolution")
-    prob, u0 = _problem_from_state(model, amplitude, frequency, order, s0, segments, integrator)
-    return solve_problem(prob, u0, frequency if prob.parameter == "frequency" else prob.value(),
-                         tol=tol, max_iter=max_iter, stability=stability)
+    prob, u0 = _problem_from_state(model, amplitude, frequency, order, s0, segments, integrator,
+                                   variational=stability)
+    sol = solve_problem(prob, u0, frequency if prob.parameter == "frequency" else prob.value(),
+                        tol=tol, max_iter=max_iter, stability=stability)
+    return _check_order(sol, frequency)
+
+
+def _check_order(sol, frequency):
+    if sol.minimal_order != sol.order:
+        warnings.warn(
+            f"periodic_solution: asked for order {sol.order} at {frequency:.9g} Hz, but the orbit "
+            f"found repeats after {sol.minimal_order} excitation period(s) (its minimal_order): "
+            f"it is an order-{sol.minimal_order} orbit. For a true order-{sol.order} orbit give "
+            "a guess on one (a branch point of that order, or a state from brute-force "
+            "integration where it is the attractor)", ContinuationWarning, stacklevel=2)
+    return sol
 
 
 def solve_problem(prob, u0, p, *, tol=1e-10, max_iter=15, stability=True, _rephased=0):
@@ -553,4 +622,5 @@ def make_solution(prob, u, p, ev, res, it, stability=True):
         xmax=ev.xmax, multipliers=mu, stable=None if mu is None else bool(np.abs(mu[0]) < 1.0),
         residual=float(res), iterations=int(it), boundaries=prob.boundaries.copy(),
         states=np.asarray(u).reshape(prob.n_seg, prob.N2).copy(),
-        monodromy=prob.monodromy(ev.Ms) if ev.Ms else None)
+        monodromy=prob.monodromy(ev.Ms) if ev.Ms else None,
+        minimal_order=prob.minimal_order(u, p) if prob.order > 1 else 1)
