@@ -59,6 +59,7 @@ class Bifurcation:
     tolerance: float
     multipliers: np.ndarray
     state0: np.ndarray | None = None
+    disc0: np.ndarray | None = None  # contact state at t = 0 when inside a contact (LN memory)
     integrator_error: float = float("nan")  # estimate, set by refine_bifurcations
     refined: object = None  # a continuation.refine.Refined, set by refine_bifurcations
 
@@ -142,6 +143,12 @@ class FrequencyResponse:
                     if b.state0 is not None:
                         st[i] = b.state0
                 gf.create_dataset("state0", data=st)
+                n3 = max([b.disc0.size for b in bif if b.disc0 is not None], default=0)
+                dc = np.full((len(bif), n3), np.nan)  # NaN: out of contact at t = 0
+                for i, b in enumerate(bif):
+                    if b.disc0 is not None:
+                        dc[i] = np.ravel(b.disc0)
+                gf.create_dataset("disc0", data=dc)
                 gs = h.create_group("superharmonics")
                 for name in ("frequency", "xmax", "harmonic", "branch", "ratio", "tolerance"):
                     gs.create_dataset(name, data=np.array([getattr(s, name) for s in
@@ -182,7 +189,9 @@ def load(path):
                 and gf["multipliers"].shape[1] else gf["multipliers"][i],
                 integrator_error=float(gf["integrator_error"][i]) if "integrator_error" in gf
                 else float("nan"),
-                state0=gf["state0"][i]))
+                state0=gf["state0"][i],
+                disc0=gf["disc0"][i].reshape(-1, 2) if "disc0" in gf and gf["disc0"].shape[1]
+                and not np.all(np.isnan(gf["disc0"][i])) else None))
         gs = h["superharmonics"]
         for i in range(len(gs["frequency"])):
             frc.superharmonics.append(Superharmonic(
@@ -436,7 +445,7 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
             m_, A_, f_ = L.point.problem.setup(L.point.p)
             bf = Bifurcation(L.kind, float(f_), float(L.point.p), float(L.point.xmax),
                              order, bi, float(L.tolerance), L.point.multipliers,
-                             L.point.problem.state_at_zero(L.point.u, L.point.p)[0])
+                             *L.point.problem.state_at_zero(L.point.u, L.point.p))
             if any(_same_point(bf, other) for other in bifs):
                 continue  # where a branch ran onto another one, its end point is already listed
             bifs.append(bf)
@@ -630,7 +639,7 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
         m_, A_, f_ = L.point.problem.setup(L.point.p)
         bifs.append(Bifurcation(L.kind, float(f_), float(L.point.p), float(L.point.xmax),
                                 solution.order, 0, float(L.tolerance), L.point.multipliers,
-                                L.point.problem.state_at_zero(L.point.u, L.point.p)[0]))
+                                *L.point.problem.state_at_zero(L.point.u, L.point.p)))
     frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=solution.amplitude,
                             parameter=parameter, p_range=(lo, hi), branches=[br],
                             bifurcations=bifs,

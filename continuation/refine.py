@@ -63,12 +63,14 @@ def _test_function(kind, M):
 def locate_extended(model, amplitude, frequency, order, state0, kind, integrator, *,
                     segments=1, tol=1e-9, max_iter=20, max_dp=2e-4):
     """Solve the extended system for a fold / period doubling of the orbit of order ``order``
-    through state0 (state at t = 0) near ``frequency`` (Hz) with ``integrator``.
-    Returns (frequency, state at t = 0, solve error in frequency). Raises ConvergenceError."""
+    through state0 (state at t = 0, or (state, contact state) when t = 0 lies inside a contact)
+    near ``frequency`` (Hz) with ``integrator``. Returns (frequency, (state, contact state) at
+    t = 0, solve error in frequency). Raises ConvergenceError."""
     if kind not in ("fold", "period-doubling"):
         raise ValueError(f"kind: must be 'fold' or 'period-doubling', got {kind!r}")
+    state0, disc0 = state0 if isinstance(state0, tuple) else (state0, None)
     prob, u0 = _problem_from_state(model, amplitude, frequency, order, state0, segments,
-                                   integrator)
+                                   integrator, disc0=disc0)
     w = prob.scale_u
     wp = prob.scale_p
     n = prob.n
@@ -122,7 +124,7 @@ def locate_extended(model, amplitude, frequency, order, state0, kind, integrator
                                f"{res:.2e} > tol {tol:.1e}); try segments=4 or a start closer "
                                "to the bifurcation")
     u, p = z[:-1] * w, z[-1] * wp
-    return float(p), prob.state_at_zero(u, p)[0], float(solve_error)
+    return float(p), prob.state_at_zero(u, p), float(solve_error)
 
 
 def _next_level(integ):
@@ -140,7 +142,7 @@ def refine(model, bifurcation, amplitude=None, *, levels=LEVELS, segments=1, tol
     ``max_levels`` levels in all; fixed-step levels only). If the first level does not converge
     from the diagram's point, it is approached through dt_scale 1/2 first. Returns a Refined."""
     A = bifurcation_amplitude(bifurcation, amplitude)
-    f, s0 = bifurcation.frequency, bifurcation.state0
+    f, s0 = bifurcation.frequency, (bifurcation.state0, getattr(bifurcation, "disc0", None))
     vals, secs, errs = [], [], []
     levels = list(levels)
 
@@ -182,7 +184,7 @@ def refine(model, bifurcation, amplitude=None, *, levels=LEVELS, segments=1, tol
         k += 1
     value, tolv, digits, ext, ratios = _estimate(vals, errs)
     return Refined(bifurcation.kind, bifurcation.order, np.array(vals), ext, float(value),
-                   float(tolv), float(digits), ratios, np.array(secs), tuple(levels), s0)
+                   float(tolv), float(digits), ratios, np.array(secs), tuple(levels), s0[0])
 
 
 def _estimate(vals, errs):

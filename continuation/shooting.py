@@ -322,8 +322,10 @@ class ShootingProblem:
         return n
 
     # --- boundaries ---------------------------------------------------------------------------
-    def trajectory(self, u, p, n_samples=None):
-        """Integrate one period from the first boundary, storing samples (nlbeam.Trajectory)."""
+    def trajectory(self, u, p, n_samples=None, disc0=None):
+        """Integrate one period from the first boundary, storing samples (nlbeam.Trajectory).
+        disc0: the contact state there if the boundary lies inside a contact (the
+        Lankarani-Nikravesh memory; None: nlbeam's start-in-contact rule)."""
         model, A, f = self.setup(p)
         ex = nlbeam.Harmonic(A, f)
         U = np.asarray(u).reshape(self.n_seg, self.N2)
@@ -335,16 +337,17 @@ class ShootingProblem:
         else:
             dt = T / (n_samples or 400 * self.order)
         return nlbeam.integrate(model, ex, t0 + T, method=it.method, dt=dt, x0=U[0], t0=t0,
-                                steps_per_contact=it.steps_per_contact, rtol=it.rtol,
-                                atol=it.atol, warn=False)
+                                disc0=disc0, steps_per_contact=it.steps_per_contact,
+                                rtol=it.rtol, atol=it.atol, warn=False)
 
-    def rephased(self, u, p, n_seg=None, steps_per_period=None):
+    def rephased(self, u, p, n_seg=None, steps_per_period=None, disc0=None):
         """A problem with boundaries moved into free flight (as far from the stops as possible,
-        spread over the period), and its u from an integration of the orbit."""
+        spread over the period), and its u from an integration of the orbit (disc0: the
+        contact state at the first boundary, if it lies inside a contact)."""
         n_seg = n_seg or self.n_seg
         spp = self.steps_per_period if steps_per_period is None else steps_per_period
         model, A, f = self.setup(p)
-        tr = self.trajectory(u, p)
+        tr = self.trajectory(u, p, disc0=disc0)
         t, S = tr.t[:-1], np.hstack([tr.x, tr.v])[:-1]
         y = tr.excitation.evaluate(t)[0]
         c = clearance(model, S, y)
@@ -526,11 +529,14 @@ def steady_state(model, amplitude, frequency, *, x0=None, efolds=8.0, min_period
 
 
 def _problem_from_state(model, amplitude, frequency, order, state0, segments, integrator,
-                        variational=True):
-    """A shooting problem with boundaries in free flight, from a state at t = 0."""
+                        variational=True, disc0=None):
+    """A shooting problem with boundaries in free flight, from a state at t = 0 (and its
+    contact state disc0 when t = 0 lies inside a contact: with the Lankarani-Nikravesh law the
+    onset velocity is memory that the state alone does not hold)."""
     base = ShootingProblem(model, amplitude, frequency, order, [0.0], integrator,
                            variational=variational)
-    return base.rephased(np.asarray(state0, dtype=float), frequency, n_seg=segments)
+    return base.rephased(np.asarray(state0, dtype=float), frequency, n_seg=segments,
+                         disc0=disc0)
 
 
 def periodic_solution(model, amplitude, frequency, order=1, guess=None, *, segments=1,
@@ -573,17 +579,18 @@ def periodic_solution(model, amplitude, frequency, order=1, guess=None, *, segme
         sol = solve_problem(prob, U.ravel(), frequency, tol=tol, max_iter=max_iter,
                             stability=stability)
         return _check_order(sol, frequency)
+    d0 = None
     if guess is None:
         s0 = steady_state(model, amplitude, frequency, integrator=integrator)
     elif isinstance(guess, PeriodicSolution):
-        s0 = guess.state0
+        s0, d0 = guess.state0, guess.disc0
     else:
         s0 = np.asarray(guess, dtype=float).ravel()
         if s0.shape != (2 * model.n_dof,):
             raise ValueError(f"guess: must be a state of length {2 * model.n_dof} or a "
                              "PeriodicSolution")
     prob, u0 = _problem_from_state(model, amplitude, frequency, order, s0, segments, integrator,
-                                   variational=stability)
+                                   variational=stability, disc0=d0)
     sol = solve_problem(prob, u0, frequency if prob.parameter == "frequency" else prob.value(),
                         tol=tol, max_iter=max_iter, stability=stability)
     return _check_order(sol, frequency)

@@ -10,6 +10,7 @@ import pytest
 import scipy.optimize
 
 import continuation as C
+from continuation.refine import LEVELS
 import nlbeam
 
 F = 0.2  # N, Duffing forcing
@@ -118,3 +119,22 @@ def test_branch_passes_a_grazing_point_where_the_linear_amplitude_reaches_the_ga
     assert len(graz) == 1
     assert abs(graz[0].frequency - f_graze) <= graz[0].tolerance + 1e-6 * f_graze
     assert graz[0].tolerance < 1e-5 * f_graze
+
+
+def test_refinement_restarts_inside_a_contact_with_its_memory(tmp_path):
+    """The period doubling near 12.68 Hz (paper model) has t = 0 inside a Lankarani-Nikravesh
+    contact: restarting from the state alone loses the onset velocity and the refinement did
+    not converge. With the contact state kept (Bifurcation.disc0, saved too) it converges, to a
+    frequency near the diagram's."""
+    m = nlbeam.BeamImpact.paper()
+    frc = C.frequency_response(m, 1e-4, (12.0, 13.5), orders=(1,), n_grid=4)
+    (pd,) = [b for b in frc.bifurcations if b.kind == "period-doubling"]
+    assert pd.disc0 is not None and pd.disc0[0, 0] == 1.0  # in contact at t = 0
+    frc.save(tmp_path / "d.h5")
+    i = frc.bifurcations.index(pd)
+    assert np.array_equal(C.load(tmp_path / "d.h5").bifurcations[i].disc0, pd.disc0)
+    f_diagram = pd.frequency
+    (bf, r), = C.refine_bifurcations(frc, m, kinds=("period-doubling",),
+                                     levels=LEVELS[:3], max_levels=3)
+    assert isinstance(r, C.Refined), r
+    assert abs(r.value - f_diagram) < 1e-2 and r.tolerance < 1e-4  # 3 levels only
