@@ -19,7 +19,8 @@ background, and has a topographic prominence, of at least ``thr`` decades, where
 
 *Where a branch resonates.* On each branch, the local maxima of ``xmax`` along the path
 (prominence >= 5 % of the branch's largest xmax; on a hardening resonance the top fold) and
-the folds located on it. The point's ``stable`` is the branch's stability there.
+the folds located on it. The point's ``stable`` is the branch's stability there (None for a
+diagram computed with ``stability=False``).
 
 *Where the excitation holds a frequency.* The frequency band ``excitation.band`` (a
 ``stochastic.BandLimitedNoise`` / ``SpectralNoise``), a pair ``(f_lo, f_hi)``, a
@@ -88,14 +89,14 @@ class Resonance:
     """A point where a branch resonates. frequency: excitation frequency (Hz); response:
     the response frequency where it shows in a PSD (Hz); kind 'harmonic', 'subharmonic'
     or 'superharmonic'; order n (subharmonic) or k (superharmonic), 1 for harmonic;
-    branch: index in ``frc.branches``; xmax (m); stable."""
+    branch: index in ``frc.branches``; xmax (m); stable (None: not computed)."""
 
     kind: str
     order: int
     frequency: float
     response: float
     xmax: float
-    stable: bool
+    stable: bool | None
     branch: int
 
 
@@ -180,6 +181,12 @@ def find_peaks(psd, *, min_prominence=0.3, background_hz=20.0, tol_bins=2.0, f_r
 
 
 # -- resonances of the diagram -------------------------------------------------------------
+def _stable_at(b, i):
+    """Stability of branch point i; None when the diagram was computed without stability
+    (``frequency_response(..., stability=False)`` leaves ``stable`` None)."""
+    return None if b.stable is None else bool(np.asarray(b.stable)[i])
+
+
 def resonances(frc, *, main_rel=0.15, max_superharmonic=5):
     """The points where the diagram's branches resonate (module doc), as Resonance list:
     order-1 and order-n points, and the superharmonic reading of order-1 points."""
@@ -190,7 +197,6 @@ def resonances(frc, *, main_rel=0.15, max_superharmonic=5):
     for bi, b in enumerate(frc.branches):
         x = np.asarray(b.xmax, dtype=float)
         fr = np.asarray(b.frequency, dtype=float)
-        st = np.asarray(b.stable, dtype=bool)
         if x.size < 3:
             continue
         pk, _ = _fp(np.r_[-np.inf, x, -np.inf], prominence=0.05 * np.max(x))
@@ -201,7 +207,8 @@ def resonances(frc, *, main_rel=0.15, max_superharmonic=5):
         for i in sorted(pts):
             n = int(b.order)
             kind = "harmonic" if n == 1 else "subharmonic"
-            r = Resonance(kind, n, float(fr[i]), float(fr[i]) / n, float(x[i]), bool(st[i]), bi)
+            r = Resonance(kind, n, float(fr[i]), float(fr[i]) / n, float(x[i]), _stable_at(b, i),
+                          bi)
             out.append(r)
             if n == 1:
                 order1.append(r)
@@ -229,7 +236,7 @@ def resonances(frc, *, main_rel=0.15, max_superharmonic=5):
                 i = int(np.argmin(np.abs(np.asarray(b.frequency) - s.frequency)))
                 out.append(Resonance("superharmonic", int(s.harmonic), float(s.frequency),
                                      int(s.harmonic) * float(s.frequency), float(s.xmax),
-                                     bool(b.stable[i]), int(s.branch)))
+                                     _stable_at(b, i), int(s.branch)))
     return out
 
 
@@ -416,8 +423,8 @@ def _forced_match(pk, frc, holds, background_hz):
             continue
         i = int(np.argmin(np.abs(fr - fp)))
         d = abs(float(fr[i]) - fp)
-        st = bool(np.asarray(b.stable)[i])
-        if d <= tol and (best is None or (d, not st) < (best[0], not best[3])):
+        st = _stable_at(b, i)
+        if d <= tol and (best is None or (d, st is not True) < (best[0], best[3] is not True)):
             best = (d, bi, i, st)
     if best is None:
         return PeakMatch(kind="harmonic", order=1, branch_frequency=math.nan, stable=None,
@@ -489,7 +496,10 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
         n = int(b.order)
         c = _ORDER_COLOUR.get(n, "k")
         fr, x = np.asarray(b.frequency), np.asarray(b.xmax) * scale
-        st = np.asarray(b.stable, dtype=bool) if stability else np.ones(fr.size, dtype=bool)
+        if stability and b.stable is not None:
+            st = np.asarray(b.stable, dtype=bool)
+        else:  # not asked for, or not computed: one style
+            st = np.ones(fr.size, dtype=bool)
         cuts = np.nonzero(np.diff(st.astype(int)))[0] + 1
         for seg in np.split(np.arange(fr.size), cuts):
             if seg.size == 0:

@@ -203,3 +203,25 @@ def test_paper_model_half_frequency_peak_is_the_order_2_branch(paper_subharmonic
     fig = plot_comparison(res.psd("delta"), frc, m, excitation=noise, f_max=120.0)
     fig.savefig(tmp_path / "cmp.png")
     assert (tmp_path / "cmp.png").stat().st_size > 1000
+
+
+def test_a_diagram_without_stability_gives_stable_none(diagram, tmp_path):
+    # frequency_response(..., stability=False) leaves every branch's `stable` None
+    nostab = SimpleNamespace(branches=[SimpleNamespace(order=b.order, frequency=b.frequency,
+                                                       xmax=b.xmax, stable=None)
+                                       for b in diagram.branches],
+                             bifurcations=[], superharmonics=[])
+    rng = np.random.default_rng(8)
+    psd = _psd([(40.0, 5e-8), (80.0, 4e-9), (45.5, 2e-8)], rng)
+    with_st = map_peaks(psd, diagram, (0.0, 200.0))
+    without = map_peaks(psd, nostab, (0.0, 200.0))
+    assert [(m.frequency, m.kind, m.order, m.note) for m in with_st] == \
+        [(m.frequency, m.kind, m.order, m.note) for m in without]
+    assert all(m.stable is None for m in without)
+    assert [m.as_row()["stable"] for m in without] == ["", "", ""]
+    (forced,) = map_peaks(_psd([(68.0, 1e-8)], rng), nostab, (60.0, 75.0))
+    assert forced.note == "forced" and forced.branch == 0 and forced.stable is None
+    import matplotlib
+    matplotlib.use("Agg")
+    plot_comparison(psd, nostab, excitation=(0.0, 200.0)).savefig(tmp_path / "c.png")
+    assert (tmp_path / "c.png").stat().st_size > 1000

@@ -293,3 +293,21 @@ def test_a_default_written_out_keys_the_same_analysis(tmp_path):
     (ja,), (jb,), (jc,) = (plan(x, tmp_path) for x in (a, b, c))
     assert ja.key == jb.key != jc.key
     assert ja.inputs["model"]["e"] == 0.5 and jc.inputs["model"]["e"] == 0.6
+
+
+def test_peaks_without_stability_on_the_real_continuation(tmp_path, calls):
+    from nlbeam.scenes import _stability_optional
+
+    if not _stability_optional():
+        pytest.skip("continuation.frequency_response has no stability keyword")
+    scene = _write(tmp_path, PERIODIC + STOCH + PEAKS_NO_STAB +
+                   '[[figure]]\nkind = "compare"\nfile = "c.png"\nstability = false\n')
+    out = tmp_path / "out"
+    rep = run_scene(scene, out, quiet=True)
+    (per,) = [j for j in rep.jobs if j.kind == "periodic"]
+    assert per.inputs["periodic"]["stability"] is False
+    frc = continuation.load(per.path)
+    assert all(b.stable is None for b in frc.branches)
+    assert (out / "c.png").stat().st_size > 1000
+    rows = list(csv.DictReader(open(out / "peaks.csv")))
+    assert all(r["stable"] == "" for r in rows)
