@@ -24,7 +24,14 @@ _CACHE = not _HAS_USER
 
 
 def njit(*args, **kw):
+    """numba.njit with the module's cache setting and, unless ``_nrt=True`` is given, without
+    numba's reference counting (NRT). The kernels below allocate nothing: they work on arrays
+    the caller owns for the whole call, so the atomic increments and decrements NRT would do
+    for every array passed at every call (about 2/3 of a right-hand side's cost) buy nothing.
+    Only ``integrate_kernel``, which allocates the work arrays, runs with NRT; a kernel without
+    NRT that tried to allocate would fail to compile (loudly)."""
     kw["cache"] = _CACHE
+    kw.setdefault("_nrt", False)
     return _njit(*args, **kw)
 
 
@@ -275,15 +282,20 @@ def _user_force_terms(t, s, P, want_var, y, yd, sysa, ks, kP):
             acc += Minv[i, j] * uf[0, j]
         ks[N + i] += acc
     if want_var:
-        sp = s.copy()
+        # the perturbed state lives in uf[2] (x) and uf[3] (v): no allocation here
+        for i in range(N):
+            uf[2, i] = s[i]
+            uf[3, i] = s[N + i]
         m = P.shape[1]
         for q in range(2 * N):
             hq = 1e-7 * (abs(s[q]) + 1e-8)
-            sp[q] = s[q] + hq
+            r = 2 if q < N else 3
+            qi = q if q < N else q - N
+            uf[r, qi] = s[q] + hq
             for i in range(N):
                 uf[1, i] = 0.0
-            _USER_FORCE(t, sp[:N], sp[N:], y, yd, upar, uf[1])
-            sp[q] = s[q]
+            _USER_FORCE(t, uf[2], uf[3], y, yd, upar, uf[1])
+            uf[r, qi] = s[q]
             for i in range(N):
                 dq = 0.0
                 for j in range(N):
@@ -302,11 +314,127 @@ def tableau(meth):
     return _A_DP5, _B_DP5, _BH_DP5, _C_DP5
 
 
+# the tableaus' nonzero entries as compile-time constants, for the unrolled steps below (the
+# same Python expressions as the arrays above, so the same doubles)
+_D21 = 1.0 / 5.0
+_D31, _D32 = 3.0 / 40.0, 9.0 / 40.0
+_D41, _D42, _D43 = 44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0
+_D51, _D52, _D53, _D54 = 19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0
+_D61, _D62, _D63, _D64, _D65 = (9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0,
+                                -5103.0 / 18656.0)
+_DB1, _DB3, _DB4, _DB5, _DB6 = (35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0,
+                                11.0 / 84.0)
+_DE1 = _DB1 - 5179.0 / 57600.0
+_DE3 = _DB3 - 7571.0 / 16695.0
+_DE4 = _DB4 - 393.0 / 640.0
+_DE5 = _DB5 - (-92097.0 / 339200.0)
+_DE6 = _DB6 - 187.0 / 2100.0
+_DE7 = 0.0 - 1.0 / 40.0
+_DC2, _DC3, _DC4, _DC5 = 0.2, 0.3, 0.8, 8.0 / 9.0
+_R6, _R3 = 1.0 / 6.0, 1.0 / 3.0
+
+
+@njit(cache=True)
+def _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, KS, KP, ytmp,
+                   fel, err_w):
+    """rk_step of RK4 or DP5 without variational equations, unrolled: the same operations in
+    the same order as the tableau loops (bitwise the same result), without their loop and
+    table overhead. KS[0] gets f0; for DP5, KS[6] = f(t + h, s_out) (first same as last)."""
+    n = s.shape[0]
+    for q in range(n):
+        KS[0, q] = f0[q]
+    if meth == RK4:
+        for q in range(n):
+            ytmp[q] = s[q] + h * 0.5 * KS[0, q]
+        st = deriv(t + 0.5 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[1], KP[1], fel)
+        if st != 0:
+            return st
+        for q in range(n):
+            ytmp[q] = s[q] + h * 0.5 * KS[1, q]
+        st = deriv(t + 0.5 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[2], KP[2], fel)
+        if st != 0:
+            return st
+        for q in range(n):
+            ytmp[q] = s[q] + h * 1.0 * KS[2, q]
+        st = deriv(t + 1.0 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[3], KP[3], fel)
+        if st != 0:
+            return st
+        for q in range(n):
+            acc = s[q] + h * _R6 * KS[0, q]
+            acc += h * _R3 * KS[1, q]
+            acc += h * _R3 * KS[2, q]
+            acc += h * _R6 * KS[3, q]
+            s_out[q] = acc
+            if not math.isfinite(acc):
+                return ERR_NONFINITE
+        return 0
+    # DP5
+    for q in range(n):
+        ytmp[q] = s[q] + h * _D21 * KS[0, q]
+    st = deriv(t + _DC2 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[1], KP[1], fel)
+    if st != 0:
+        return st
+    for q in range(n):
+        acc = s[q] + h * _D31 * KS[0, q]
+        ytmp[q] = acc + h * _D32 * KS[1, q]
+    st = deriv(t + _DC3 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[2], KP[2], fel)
+    if st != 0:
+        return st
+    for q in range(n):
+        acc = s[q] + h * _D41 * KS[0, q]
+        acc += h * _D42 * KS[1, q]
+        ytmp[q] = acc + h * _D43 * KS[2, q]
+    st = deriv(t + _DC4 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[3], KP[3], fel)
+    if st != 0:
+        return st
+    for q in range(n):
+        acc = s[q] + h * _D51 * KS[0, q]
+        acc += h * _D52 * KS[1, q]
+        acc += h * _D53 * KS[2, q]
+        ytmp[q] = acc + h * _D54 * KS[3, q]
+    st = deriv(t + _DC5 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[4], KP[4], fel)
+    if st != 0:
+        return st
+    for q in range(n):
+        acc = s[q] + h * _D61 * KS[0, q]
+        acc += h * _D62 * KS[1, q]
+        acc += h * _D63 * KS[2, q]
+        acc += h * _D64 * KS[3, q]
+        ytmp[q] = acc + h * _D65 * KS[4, q]
+    st = deriv(t + 1.0 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[5], KP[5], fel)
+    if st != 0:
+        return st
+    for q in range(n):
+        acc = s[q] + h * _DB1 * KS[0, q]
+        acc += h * _DB3 * KS[2, q]
+        acc += h * _DB4 * KS[3, q]
+        acc += h * _DB5 * KS[4, q]
+        acc += h * _DB6 * KS[5, q]
+        ytmp[q] = acc
+        s_out[q] = acc
+        if not math.isfinite(acc):
+            return ERR_NONFINITE
+    st = deriv(t + 1.0 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[6], KP[6], fel)
+    if st != 0:
+        return st
+    for q in range(n):
+        acc = h * _DE1 * KS[0, q]
+        acc += h * _DE3 * KS[2, q]
+        acc += h * _DE4 * KS[3, q]
+        acc += h * _DE5 * KS[4, q]
+        acc += h * _DE6 * KS[5, q]
+        err_w[q] = acc + h * _DE7 * KS[6, q]
+    return 0
+
+
 @njit(cache=True)
 def rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
             s_out, P_out, KS, KP, ytmp, Ptmp, fel, err_w):
     """Advance (s, P) by h. f0 is f(t, s) (stage 0, reused when not want_var).
     For DP5 err_w gets the embedded error vector. Returns status."""
+    if not want_var and meth != RK2:
+        return _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, KS, KP,
+                              ytmp, fel, err_w)
     A, B, BH, Cc = tableau(meth)
     ns = B.shape[0]
     n = s.shape[0]
@@ -689,7 +817,7 @@ def contact_rate(t, s, disc, sysa, xc, xp, xtab):
     return lam
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=True)
 def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_init, max_steps,
                      s0, disc0, events_on, want_var, P0, dvm0, track_xmax, store_every, graded,
                      out_t, out_s, out_d, out_f, ev_log,
@@ -743,6 +871,30 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
     from_before = np.zeros(ne, dtype=np.bool_)
     dtc = np.full(ne, np.inf)
     d_sw = np.full(ne, -1.0)     # delta at which the graded exit phase starts (-1: unknown)
+    return _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_init,
+                           max_steps, events_on, want_var, track_xmax, store_every, graded,
+                           out_t, out_s, out_d, out_f, ev_log, s_end, disc_end, P_end, dvm_end,
+                           xmax, counters, fcounters, KS, KP, KT, ytmp, Ptmp, fel, err_w, s, P,
+                           dvm, disc, s_new, P_new, s_try, f0, f1, dummyP, steps_in_contact,
+                           from_before, dtc, d_sw)
+
+
+@njit(cache=True)
+def _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_init, max_steps,
+                    events_on, want_var, track_xmax, store_every, graded, out_t, out_s, out_d,
+                    out_f, ev_log, s_end, disc_end, P_end, dvm_end, xmax, counters, fcounters,
+                    KS, KP, KT, ytmp, Ptmp, fel, err_w, s, P, dvm, disc, s_new, P_new, s_try, f0,
+                    f1, dummyP, steps_in_contact, from_before, dtc, d_sw):
+    """The body of integrate_kernel, on the work arrays it allocated (no reference counting
+    here: see ``njit``)."""
+    KAPPA = 0.25
+    etype = sysa[4]
+    N = sysa[0].shape[0]
+    n = 2 * N
+    ne = etype.shape[0]
+    m = P.shape[1]
+    A, B, BH, Cc = tableau(meth)
+    ns = B.shape[0]
     y, yd, ydd, st = excite(t0, xc, xp, xtab)
     for e in range(ne):
         if disc[e, 0] != 0.0:
@@ -962,8 +1114,15 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
                     t_new = t + h
             else:
                 t_new = t_end if t + h >= t_end else t + h
-            st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
-            n_rhs += 1
+            if not fixed and t_new == t + h:
+                # first same as last: DP5's stage 7 is f(t + h, s_new), bit for bit
+                for q in range(n):
+                    f1[q] = KS[6, q]
+                st = 0
+            else:
+                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0],
+                           fel)
+                n_rhs += 1
             if st != 0:
                 status = st
                 break

@@ -247,7 +247,7 @@ class System:
             raise ValueError("custom_params: must be finite")
         arrays = (np.ascontiguousarray(Minv @ K), np.ascontiguousarray(Minv @ C),
                   Minv @ yl, Minv @ ydl, etype, ew, ewy, egap, epar,
-                  np.ascontiguousarray(ew @ Minv.T), upar, np.zeros((2, N)),
+                  np.ascontiguousarray(ew @ Minv.T), upar, np.zeros((4, N)),
                   np.ascontiguousarray(Minv))
         object.__setattr__(self, "_arrays", arrays)
 
