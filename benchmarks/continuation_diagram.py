@@ -9,6 +9,8 @@ cost. Saves figures/frc_paper.png and figures/frc_paper.h5.
 
     python benchmarks/continuation_diagram.py [--quick]   (--quick: refine order 1 only)
     python benchmarks/continuation_diagram.py --plot      (redraw the figure from the .h5)
+    python benchmarks/continuation_diagram.py --stability (harmonic branch 15-150 Hz with and
+                                                           without stability: cost)
 """
 import os
 import sys
@@ -108,8 +110,24 @@ def main(quick=False):
     frc.save(os.path.join(ROOT, "figures", "frc_paper.h5"))
 
 
+def stability_cost():
+    """The harmonic branch 15-150 Hz with stability=True and stability=False."""
+    warnings.simplefilter("ignore", RuntimeWarning)
+    model = nlbeam.BeamImpact.paper()
+    C.periodic_solution(model, A, 44.0)  # JIT warm-up
+    for st in (True, False):
+        t, c = time.perf_counter(), time.process_time()
+        frc = C.frequency_response(model, A, (15.0, 150.0), orders=(1,), stability=st)
+        print(f"stability={st}: {time.perf_counter() - t:.2f} s wall, "
+              f"{time.process_time() - c:.2f} s CPU, {frc.n_points} points, "
+              f"{sum(b.kind == 'fold' for b in frc.bifurcations)} folds, "
+              f"{len(frc.bifurcations)} bifurcations")
+
+
 if __name__ == "__main__":
-    if "--plot" in sys.argv:  # redraw the figure from figures/frc_paper.h5
+    if "--stability" in sys.argv:
+        stability_cost()
+    elif "--plot" in sys.argv:  # redraw the figure from figures/frc_paper.h5
         figure(C.load(os.path.join(ROOT, "figures", "frc_paper.h5")))
     else:
         main(quick="--quick" in sys.argv)
