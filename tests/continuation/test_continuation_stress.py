@@ -138,3 +138,19 @@ def test_refinement_restarts_inside_a_contact_with_its_memory(tmp_path):
                                      levels=LEVELS[:3], max_levels=3)
     assert isinstance(r, C.Refined), r
     assert abs(r.value - f_diagram) < 1e-2 and r.tolerance < 1e-4  # 3 levels only
+
+
+def test_no_progress_rule_stops_the_branch_loudly():
+    """A branch whose last points advance less than progress_min (here set so that every
+    branch qualifies) stops with a ContinuationWarning that says where and what to change."""
+    from continuation.pathfollow import Tracer
+    from continuation.shooting import _problem_from_state
+
+    m = nlbeam.Duffing(m=1.0, b=0.1, k=1.0, k3=1.0)
+    sol = C.periodic_solution(m, F, 0.3, dt_scale=0.5)
+    prob, u0 = _problem_from_state(m, F, 0.3, 1, sol.state0, 1, C.Integrator(dt_scale=0.5))
+    tracer = Tracer(p_min=0.1, p_max=0.5, progress_points=5, progress_min=1e3, label="test branch")
+    with pytest.warns(C.ContinuationWarning,
+                      match=r"test branch made no progress near 0\.\d+ .*dt_scale=0\.5"):
+        pts, _, reason = tracer.trace(prob, u0, 0.3)
+    assert reason == "no progress" and len(pts) == 6
