@@ -428,19 +428,24 @@ def _same_point(a, b, rel=1e-6):
 
 
 def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer, integrator,
-                 segments, n_grid, switch, starts, brute, variational=True):
+                 segments, n_grid, switch, starts, brute, variational=True, progress=None):
     branches, bifs, pd_points = [], [], []
     t_start = time.perf_counter()
+    say = progress if progress is not None else (lambda msg: None)
     cand = []
     if brute and parameter == "frequency":
         grid = np.linspace(p_range[0], p_range[1], n_grid)
         cand = brute_force(model, amplitude, grid, orders, integrator)
+        say(f"brute-force grid: {len(cand)} periodic attractors at {n_grid} frequencies "
+            f"({time.perf_counter() - t_start:.1f} s)")
     for s in starts:
         cand.append(s)
 
     def add(points, located, order, origin):
         bi = len(branches)
-        branches.append(_to_branch(points, order, parameter, origin))
+        br = _to_branch(points, order, parameter, origin)
+        branches.append(br)
+        n_bifs = len(bifs)
         for L in located:
             m_, A_, f_ = L.point.problem.setup(L.point.p)
             bf = Bifurcation(L.kind, float(f_), float(L.point.p), float(L.point.xmax),
@@ -451,6 +456,10 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
             bifs.append(bf)
             if L.kind == "period-doubling":
                 pd_points.append((L.point, order, bi))
+        lo, hi = float(np.min(br.frequency)), float(np.max(br.frequency))
+        say(f"branch {bi + 1} (order {order}, {origin}): {lo:.6g}-{hi:.6g} Hz, "
+            f"{len(br.values)} points, {len(bifs) - n_bifs} bifurcations "
+            f"({time.perf_counter() - t_start:.1f} s)")
 
     handled = set()
     for order in sorted(orders):
@@ -574,7 +583,7 @@ def _superharmonics(branches, model, integrator, orders=(2, 3), window=0.15, min
 def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30, segments=1,
                        integrator=None, switch=True, brute_force_grid=True, starts=(),
                        ds=0.02, ds_max=0.5, max_angle=0.2, max_points=1000, tol=1e-10,
-                       bif_tol=1e-8, stability=True, **integrator_kw):
+                       bif_tol=1e-8, stability=True, progress=None, **integrator_kw):
     """The |x|max-versus-frequency diagram at excitation amplitude (m, or N for force).
 
     f_range: (f_lo, f_hi) Hz. Branches of each order in ``orders`` start from periodic
@@ -590,6 +599,8 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
     tangent turns back in frequency), but period doublings and Neimark-Sacker points are not
     detected, so orders > 1 come from the brute-force grid only. xmax is the same as with
     stability (the same discrete orbits).
+    progress: callable(str), called with a one-line status after the brute-force grid and after
+    each branch (its range in Hz, points, bifurcations, elapsed s); None for silence.
     Returns a FrequencyResponse (``settings['stability']`` says which).
     """
     integrator = integrator or Integrator(**integrator_kw)
@@ -603,7 +614,7 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
     branches, bifs, _ = _run_diagram(model, amplitude, (f_lo, f_hi), orders, "frequency", None,
                                      tracer, integrator, segments, n_grid,
                                      switch and stability, list(starts), brute_force_grid,
-                                     variational=stability)
+                                     variational=stability, progress=progress)
     sup = _superharmonics(branches, model, integrator)
     frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=float(amplitude),
                             parameter="frequency", p_range=(f_lo, f_hi), branches=branches,

@@ -166,7 +166,8 @@ def _frc(args):
     log(f"nlbeam frc: A = {args.amplitude:g} m, {args.f_range[0]:g}-{args.f_range[1]:g} Hz, "
         f"orders {args.orders}, {args.n_grid} grid frequencies (this can take minutes)")
     frc = continuation.frequency_response(model, args.amplitude, tuple(args.f_range),
-                                          orders=tuple(args.orders), n_grid=args.n_grid)
+                                          orders=tuple(args.orders), n_grid=args.n_grid,
+                                          progress=lambda msg: log(f"nlbeam frc:   {msg}"))
     frc.save(args.out)
     log(f"nlbeam frc: {len(frc.branches)} branches, {frc.n_points} points, "
         f"{len(frc.bifurcations)} bifurcations in {frc.wall_time:.1f} s -> {args.out}")

@@ -478,6 +478,8 @@ def _compute(job_inputs):
 
         p = job_inputs["periodic"]
         kw = {} if p.get("stability", True) else {"stability": False}  # planned only if supported
+        if job_inputs.get("_progress") is not None:
+            kw["progress"] = job_inputs["_progress"]
         return continuation.frequency_response(
             model, p["amplitude"], tuple(p["f_range"]), orders=tuple(p["orders"]),
             n_grid=p["n_grid"], segments=p["segments"], dt_scale=p["dt_scale"], **kw)
@@ -682,6 +684,8 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
                             last[0] = time.perf_counter()
                             log(f"nlbeam:   simulated {done:.4g} / {total:.4g} s")
                     inputs["_progress"] = progress
+                elif j.kind == "periodic" and not quiet:
+                    inputs["_progress"] = lambda msg: log(f"nlbeam:   {msg}")
                 t = time.perf_counter()
                 r = _compute(inputs)
                 _store(j, r, log)

@@ -108,7 +108,16 @@ def test_failure_is_one_line_and_exit_2(tmp_path, capsys):
 def test_frc_simulate_compare(tmp_path, capsys):
     frc, sto, png = (str(tmp_path / n) for n in ("frc.h5", "sto.h5", "cmp.png"))
     assert main(["frc", "--amplitude", "1e-4", "--f-range", "42", "45", "--orders", "1",
-                 "--n-grid", "3", "--out", frc, "--quiet"]) == 0
+                 "--n-grid", "3", "--out", frc]) == 0
+    # progress on stderr: the brute-force grid, then one line per branch with its points
+    err = capsys.readouterr().err.splitlines()
+    import continuation
+    diagram = continuation.load(frc)
+    branch_lines = [ln for ln in err if ln.startswith("nlbeam frc:   branch ")]
+    assert any(ln.startswith("nlbeam frc:   brute-force grid: ") for ln in err), err
+    assert len(branch_lines) == len(diagram.branches) >= 1
+    assert [int(ln.split(" points")[0].split()[-1]) for ln in branch_lines] == \
+        [len(b.values) for b in diagram.branches]
     assert main(["simulate", "--band", "0", "100", "--duration", "10", "--transient", "0.1",
                  "--psd-resolution", "1", "--channels", "delta", "--out", sto, "--quiet"]) == 0
     capsys.readouterr()
