@@ -3,8 +3,9 @@
 Runs, one after the other on this machine, the integrator benchmark, the scaling study (cost
 against record length, spectral components, contact stiffness, degrees of freedom, with fitted
 slopes and log-log plots), the stochastic work-precision study against scipy, and the
-continuation diagram with the convergence of its fold and period-doubling frequencies; records
-the machine and versions at the top. Each study's own output is kept verbatim.
+continuation diagram with the convergence of its fold and period-doubling frequencies, the
+multi-mode beam's cost and convergence in the number of modes, and a 10^4 s stochastic record
+(energy balance, moments, memory); records the machine and versions at the top. Each study's own output is kept verbatim.
 """
 import argparse
 import contextlib
@@ -61,7 +62,9 @@ def main(argv=None):
                ("Continuation: the paper model's diagram and its convergence",
                 "continuation_diagram.py", ("--quick",) if args.quick else ()),
                ("Modal beam: cost and convergence against the number of modes",
-                "modal_scaling.py", ("--quick",) if args.quick else ())]
+                "modal_scaling.py", ("--quick",) if args.quick else ()),
+               ("A 10^4 s stochastic record: energy balance, moments and memory",
+                "long_record.py", ("--duration", "1000", "--batch", "100") if args.quick else ())]
     for title, script, extra in studies:
         if not (HERE / script).exists():
             continue

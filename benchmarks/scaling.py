@@ -138,33 +138,67 @@ def dofs(out):
 
 
 @njit
-def _rhs_loop(n, sysa, xc, xp, xtab):
+def _rhs_loop(n, sysa, xc, xp, xtab, want_var):
     s = np.zeros(2)
-    P = np.zeros((2, 1))
-    dvm = np.zeros((1, 1))
+    P = np.eye(2)
+    dvm = np.zeros((1, 2))
     disc = np.zeros((1, 2))
+    disc[0, 0] = 1.0  # in contact: the element's force and its derivatives are evaluated
+    disc[0, 1] = 0.1
     ks = np.zeros(2)
-    kP = np.zeros((2, 1))
+    kP = np.zeros((2, 2))
     fel = np.zeros(1)
     acc = 0.0
     for i in range(n):
-        s[0] = 1e-9 * i
-        K.deriv(1e-6 * i, s, P, dvm, disc, False, sysa, xc, xp, xtab, ks, kP, fel)
-        acc += ks[1]
+        s[0] = 1e-6 + 1e-12 * i  # penetrating the stop (delta = x - y > 0 near t = 0)
+        s[1] = 0.05
+        K.deriv(1e-7 * (i % 1000), s, P, dvm, disc, want_var, sysa, xc, xp, xtab, ks, kP, fel)
+        acc += ks[1] + kP[1, 0]
+    return acc
+
+
+@njit
+def _excite_loop(n, code, p, tab, t_span):
+    acc = 0.0
+    for i in range(n):
+        y, yd, ydd, st = K.excite(t_span * (i / n), code, p, tab)  # forward, as an integrator
+        acc += y + yd
     return acc
 
 
 def profile():
+    """Costs of the hot-path pieces (ns), each measured in a compiled loop, and what a run
+    spends: rk4 in contact and free flight, a flow over one period with and without the
+    variational equations (monodromy), the excitation evaluated from a Hermite table, by
+    formula and as a direct cosine sum."""
     model = nlbeam.BeamImpact.paper()
     ex = nlbeam.Harmonic(1e-4, 40.0)
     sysa = model.kernel_arrays()
     xc, xp, xtab = ex.kernel_args()
-    _rhs_loop(10, sysa, xc, xp, xtab)
     n = 2_000_000
-    t_rhs = wall(lambda: _rhs_loop(n, sysa, xc, xp, xtab)) / n
+    rhs = {}
+    for var in (False, True):
+        _rhs_loop(10, sysa, xc, xp, xtab, var)
+        rhs[var] = wall(lambda var=var: _rhs_loop(n, sysa, xc, xp, xtab, var)) / n
     tr = nlbeam.integrate(model, ex, 10.0, store_every=0)
     t_run = wall(lambda: nlbeam.integrate(model, ex, 10.0, store_every=0))
-    return t_rhs, tr.n_rhs, t_run, tr.n_steps
+    noise = st.BandLimitedNoise((0.0, 200.0), rms=1e-4, seed=1)
+    tab_ex = noise.sampled(10.0)
+    cos_ex = nlbeam.CosineSum(np.linspace(1.0, 200.0, 100), np.full(100, 1e-5), np.zeros(100))
+    exc = {}
+    for name, e in (("Hermite table (noise)", tab_ex), ("harmonic formula", ex),
+                    ("direct sum of 100 cosines", cos_ex)):
+        c, p_, tb = e.kernel_args()
+        _excite_loop(10, c, p_, tb, 1.0)
+        m = n if name != "direct sum of 100 cosines" else n // 50
+        exc[name] = wall(lambda c=c, p_=p_, tb=tb, m=m: _excite_loop(m, c, p_, tb, 9.0)) / m
+    s0 = np.array([0.0, 0.0])
+    fl = {}
+    for mono in (False, True):
+        nlbeam.flow(model, ex, s0, 0.0, 0.025, monodromy=mono)
+        fl[mono] = wall(lambda mono=mono: nlbeam.flow(model, ex, s0, 0.0, 0.025,
+                                                      monodromy=mono), 20)
+    return dict(rhs=rhs, n_rhs=tr.n_rhs, t_run=t_run, n_steps=tr.n_steps, exc=exc, flow=fl)
 
 
 def main(out="benchmarks"):
@@ -177,13 +211,23 @@ def main(out="benchmarks"):
     for name, x, y, case in rows:
         lines.append(f"| {name} | {', '.join(f'{v:g}' for v in x)} | "
                      f"{', '.join(f'{v:.3g}' for v in y)} | {fit(x, y):.2f} | {case} |")
-    t_rhs, n_rhs, t_run, n_steps = profile()
+    pr = profile()
+    t_rhs, n_rhs, t_run, n_steps = pr["rhs"][False], pr["n_rhs"], pr["t_run"], pr["n_steps"]
     lines += ["", "Hot path (paper model, 10 s at A = 0.1 mm, 40 Hz, rk4 defaults):", "",
-              f"- one right-hand-side evaluation: {t_rhs * 1e9:.0f} ns (numba loop calling the "
-              f"kernel's `deriv`); the run needs {n_rhs} of them: {t_rhs * n_rhs:.4f} s",
+              f"- one right-hand-side evaluation (in contact, all element derivatives): "
+              f"{t_rhs * 1e9:.0f} ns (numba loop calling the kernel's `deriv`); the run needs "
+              f"{n_rhs} of them: {t_rhs * n_rhs:.4f} s",
               f"- the run takes {t_run:.4f} s for {n_steps} steps ({t_run / n_steps * 1e9:.0f} ns per "
               f"step): right-hand sides are {100 * t_rhs * n_rhs / t_run:.0f} % of it; the rest is "
-              "event checks, dense output and bookkeeping."]
+              "event checks, dense output and bookkeeping.",
+              f"- with the variational equations (2x2 sensitivity, 1 DOF): "
+              f"{pr['rhs'][True] * 1e9:.0f} ns per right-hand side "
+              f"({pr['rhs'][True] / t_rhs:.2f}x); a flow over one period (25 ms, 1 impact) costs "
+              f"{pr['flow'][False] * 1e6:.0f} us without and {pr['flow'][True] * 1e6:.0f} us with "
+              f"the monodromy ({pr['flow'][True] / pr['flow'][False]:.2f}x; includes the Python "
+              "set-up of each call)",
+              "- excitation evaluation (y, y', y'' at one time): " + ", ".join(
+                  f"{k} {v * 1e9:.0f} ns" for k, v in pr["exc"].items())]
     text = "\n".join(lines)
     print(text)
     return text
