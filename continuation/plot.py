@@ -43,10 +43,15 @@ def plot_frequency_response(frc, ax=None, *, scale=1e3, unit="mm", grazing=True)
         ax.plot(bf.value, bf.xmax * scale, m, mfc="none", color="k", ms=ms, mew=0.8,
                 label=None if bf.kind in done else name, zorder=5)
         done.add(bf.kind)
-    for sh in frc.superharmonics:
-        ax.annotate(f"superharmonic\norder {sh.harmonic}\n{sh.frequency:.2f} Hz",
+    span = abs(frc.p_range[1] - frc.p_range[0])
+    level, last = 0, None
+    for sh in sorted(frc.superharmonics, key=lambda sh: sh.frequency):
+        # labels closer than 12 % of the axis are stacked, so that their texts do not overlap
+        level = level + 1 if last is not None and sh.frequency - last < 0.12 * span else 0
+        last = sh.frequency
+        ax.annotate(f"superharmonic k = {sh.harmonic}\n{sh.frequency:.2f} Hz",
                     (sh.frequency, sh.xmax * scale), textcoords="offset points",
-                    xytext=(0, 18), ha="center", fontsize=8,
+                    xytext=(0, 18 + 26 * level), ha="center", fontsize=8,
                     arrowprops=dict(arrowstyle="-", lw=0.6))
     ax.set_xlim(*frc.p_range)
     ax.set_xlabel("excitation frequency [Hz]" if frc.parameter == "frequency" else frc.parameter)
