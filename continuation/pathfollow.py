@@ -348,18 +348,40 @@ class Tracer:
             if pt.n_impacts != prev.n_impacts:
                 g = self.locate_grazing(prob, z, t, ds, prev, pt, jumped)
                 located.append(Located("grazing", g[0], g[1], len(pts) - 1))
+                if (self.detect and jumped and g[0] is not pt and g[0].multipliers is not None
+                        and g[0].n_impacts == pt.n_impacts):
+                    # the jump landed beyond a stretch of the far side (from the grazing point
+                    # to pt) that no step traced: a test function that changes sign there
+                    tg = self._tests(g[0])
+                    for k, kind in enumerate(KINDS[1:], start=1):  # not folds (see below)
+                        if (np.sign(tg[k]) != np.sign(tf[k]) and tf[k] != 0 and tg[k] != 0
+                                and (kind != "neimark-sacker" or _has_pair_near_circle(
+                                    g[0].multipliers, pt.multipliers))):
+                            loc = self.locate_p(prob, g[0], pt, k, tg[k], tf[k])
+                            if loc is None:
+                                loc = (pt, abs(pt.p - g[0].p))
+                            located.append(Located(kind, loc[0], loc[1], len(pts) - 1))
             if stop is not None and stop(pt):
                 pts.append(pt)
                 tfs.append(tf)
                 reason = "stop"
                 break
-            if self.detect and not jumped:
+            # test functions: along the step, or across a jump that kept the number of impacts
+            # (a natural-parameter step where the corrector failed: the map is smooth there
+            # as far as the impacts go; period doublings and Neimark-Sacker points are then
+            # located by bisection in p, folds not: p does not parametrise a fold)
+            if self.detect and (not jumped or pt.n_impacts == prev.n_impacts):
                 for k, kind in enumerate(KINDS):
+                    if jumped and kind == "fold":
+                        continue
                     if np.sign(tf[k]) != np.sign(tfs[-1][k]) and tf[k] != 0:
                         if kind == "neimark-sacker" and not _has_pair_near_circle(
                                 pts[-1].multipliers, pt.multipliers):
                             continue
-                        loc = self.locate(prob, z, t, ds, k, tfs[-1][k], tf[k], prev.corr)
+                        if jumped:
+                            loc = self.locate_p(prob, prev, pt, k, tfs[-1][k], tf[k])
+                        else:
+                            loc = self.locate(prob, z, t, ds, k, tfs[-1][k], tf[k], prev.corr)
                         if loc is None:  # not located: the bracket is the step
                             loc = (pt, abs(pt.p - prev.p))
                         located.append(Located(kind, loc[0], loc[1], len(pts) - 1))
@@ -512,6 +534,47 @@ class Tracer:
         return best, abs(best.p - lo_p)
 
     # --- bifurcation location -----------------------------------------------------------------
+    def locate_p(self, prob, pa, pb, k, g_a, g_b):
+        """Illinois regula falsi in p between the points pa and pb (a jump: a natural-parameter
+        step), solving at fixed p from the linear interpolation of their unknowns, until the
+        bracket's width is below bif_tol * |p|. Returns (Point, tolerance), or None when a
+        solve fails or leaves the stretch (another number of impacts)."""
+        w, wp = prob.scale_u, prob.scale_p
+        if pa.problem is not prob or pb.problem is not prob:
+            return None
+        e_p = np.zeros(len(w) + 1)
+        e_p[-1] = 1.0
+        lo, hi, glo, ghi = pa.p, pb.p, g_a, g_b
+        best, side = None, 0
+        for _ in range(60):
+            p = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
+            if not (min(lo, hi) < p < max(lo, hi)):
+                p = 0.5 * (lo + hi)
+            lam = (p - pa.p) / (pb.p - pa.p)
+            u = pa.u + lam * (pb.u - pa.u)
+            try:
+                zs, evs, _ = self.correct(prob, np.r_[u / w, p / wp], e_p, fixed_p=True)
+            except ConvergenceError:
+                return None
+            pt = self._point(prob, zs, evs)
+            if pt.n_impacts != pa.n_impacts or pt.multipliers is None:
+                return None
+            g = self._tests(pt)[k]
+            best = pt
+            if np.sign(g) == np.sign(glo):
+                lo, glo = p, g
+                if side == -1:
+                    ghi *= 0.5
+                side = -1
+            else:
+                hi, ghi = p, g
+                if side == 1:
+                    glo *= 0.5
+                side = 1
+            if abs(hi - lo) <= self.bif_tol * abs(p) or g == 0:
+                break
+        return best, abs(hi - lo)
+
     def locate(self, prob, z_a, t_a, ds, k, g_a, g_b, C_a=None):
         """Illinois regula falsi on the arclength step from z_a (test function k), until the
         bracket's width in p is below bif_tol * |p|. Returns (Point, tolerance) or None."""

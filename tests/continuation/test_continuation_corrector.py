@@ -44,3 +44,28 @@ def test_fixed_p_corrector_leaves_out_dRdp_and_fills_it_in():
     d = (prob.evaluate(us, ps * (1 + h), jac=False, jac_p=False).R
          - prob.evaluate(us, ps * (1 - h), jac=False, jac_p=False).R) / (2 * h * ps)
     np.testing.assert_allclose(ev_b.B[:, -1], d * wp / w, rtol=1e-4, atol=1e-6)
+
+
+def test_locate_p_finds_the_period_doubling_located_along_the_arclength():
+    # the harmonic branch of the paper model has a period doubling near 15.94 Hz (1 impact per
+    # period on both sides): locate_p (bisection in p, as after a jump) and locate (regula
+    # falsi along the arclength) must agree to the bracket
+    f_a, f_b = 15.90, 15.98
+    prob, u_a = _problem(f_a)
+    tr = Tracer(bif_tol=1e-10)
+    w, wp = prob.scale_u, prob.scale_p
+    e_p = np.zeros(len(u_a) + 1)
+    e_p[-1] = 1.0
+    z_a, ev_a, _ = tr.correct(prob, np.r_[u_a / w, f_a / wp], e_p, fixed_p=True)
+    z_b, ev_b, _ = tr.correct(prob, np.r_[u_a / w, f_b / wp], e_p, fixed_p=True)
+    pa, pb = tr._point(prob, z_a, ev_a), tr._point(prob, z_b, ev_b)
+    assert pa.n_impacts == pb.n_impacts
+    ga, gb = tr._tests(pa)[1], tr._tests(pb)[1]
+    assert ga * gb < 0  # a period doubling between them
+    q, tol = tr.locate_p(prob, pa, pb, 1, ga, gb)
+    assert tol < 1e-10 * 16.0 * 2
+    assert abs(np.prod(q.multipliers + 1.0).real) < 1e-6  # a multiplier at -1
+    ds = float(np.linalg.norm(z_b - z_a))
+    t = (z_b - z_a) / ds
+    q2, tol2 = tr.locate(prob, z_a, t, ds, 1, ga, gb)
+    assert abs(q.p - q2.p) < 2 * (tol + tol2) + 1e-9 * q.p
