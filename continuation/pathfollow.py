@@ -125,9 +125,10 @@ class Tracer:
             B[:, :n] = ev.Ju * w[None, :] / w[:, None]
         return B
 
-    def _correction(self, prob, z, ev, C_prev):
+    def _correction(self, prob, z, ev, C_prev, fixed_p=False):
         """The secant correction to start from: zero (or, without variational equations,
-        dR/du by forward differences), with dR/dp by a forward difference at z. (C_prev is
+        dR/du by forward differences), with dR/dp by a forward difference at z, or zero with
+        ``fixed_p`` (a corrector at fixed p does not use it: see ``correct``). (C_prev is
         not used: a carried correction went stale over a step.)"""
         w, wp = prob.scale_u, prob.scale_p
         n = len(w)
@@ -140,18 +141,42 @@ class Tracer:
             self.n_evaluations += n
         # dR/dp changes fastest along a branch: a fresh forward difference (one flow without
         # variational equations) saves more iterations than it costs
-        C[:, n] = prob.jacobian_p(z[:-1] * w, z[-1] * wp, ev) * wp / w
-        self.n_evaluations += 1
+        if not fixed_p:
+            C[:, n] = self._dRdp(prob, z, ev)
         return C
 
-    def correct(self, prob, zeta_pred, t, C_prev=None):
+    def _dRdp(self, prob, z, ev):
+        """Scaled dR/dp at z (ev: the evaluation there) by a forward difference (one flow)."""
+        w, wp = prob.scale_u, prob.scale_p
+        self.n_evaluations += 1
+        return prob.jacobian_p(z[:-1] * w, z[-1] * wp, ev) * wp / w
+
+    def complete_jacobian(self, prob, ev):
+        """Fill in the dR/dp column of the Jacobian of an evaluation returned by a corrector
+        at fixed p (``correct(..., fixed_p=True)``), by the forward difference at its start
+        (what the corrector would have used), for a tangent there."""
+        if getattr(ev, "lazy_p", None) is not None:
+            z0, ev0 = ev.lazy_p
+            col = self._dRdp(prob, z0, ev0)
+            ev.B = ev.B.copy()
+            ev.B[:, -1] += col
+            ev.C = ev.C.copy()
+            ev.C[:, -1] += col
+            ev.lazy_p = None
+        return ev
+
+    def correct(self, prob, zeta_pred, t, C_prev=None, fixed_p=False):
         """Solve R = 0 with t . (zeta - zeta_pred) = 0 from zeta_pred by quasi-Newton (see the
         class doc): the Jacobian is B = [dR/du from the variational equations at the iterate
         | 0] + C, with the correction C (its last column dR/dp) updated by Broyden's formula so
         that B meets the secant condition of every step, and carried from point to point
         (C_prev: that of a nearby point). Returns (zeta, evaluation, iterations); the
         evaluation (with the monodromies, if computed) is the one at the returned zeta, with
-        ``B`` the final Jacobian and ``C`` its correction."""
+        ``B`` the final Jacobian and ``C`` its correction.
+        fixed_p: t is the unit vector of p (the iterates keep p = zeta_pred's): the dR/dp column
+        does not enter the Newton steps (their p component is zero) nor Broyden's updates, so
+        its forward difference is left out (a flow saved); ``complete_jacobian`` fills it in
+        when a tangent is wanted."""
         w, wp = prob.scale_u, prob.scale_p
         var = getattr(prob, "variational", True)
         z = zeta_pred.copy()
@@ -176,13 +201,14 @@ class Tracer:
                 break
             base = self._base(prob, ev)
             if C is None:
-                C = self._correction(prob, z, ev, C_prev)
+                C = self._correction(prob, z, ev, C_prev, fixed_p)
+                lazy = (z.copy(), ev) if fixed_p else None
             elif dz_norm > 1e-6:
                 # Broyden's update (not from steps so short that the map's noise, ~1e-8 where
                 # contacts nearly stick, would dominate the difference)
                 C = C + np.outer(r - r_prev - (base + C) @ dz, dz) / (dz @ dz)
             B = base + C
-            ev.B, ev.C = B, C
+            ev.B, ev.C, ev.lazy_p = B, C, lazy
             if res < self.tol or (res < 100 * self.tol and dz_norm < 1e-9):
                 return z, ev, it
             if it >= 3 and res > self.contraction * res_prev:
@@ -322,18 +348,40 @@ class Tracer:
             if pt.n_impacts != prev.n_impacts:
                 g = self.locate_grazing(prob, z, t, ds, prev, pt, jumped)
                 located.append(Located("grazing", g[0], g[1], len(pts) - 1))
+                if (self.detect and jumped and g[0] is not pt and g[0].multipliers is not None
+                        and g[0].n_impacts == pt.n_impacts):
+                    # the jump landed beyond a stretch of the far side (from the grazing point
+                    # to pt) that no step traced: a test function that changes sign there
+                    tg = self._tests(g[0])
+                    for k, kind in enumerate(KINDS[1:], start=1):  # not folds (see below)
+                        if (np.sign(tg[k]) != np.sign(tf[k]) and tf[k] != 0 and tg[k] != 0
+                                and (kind != "neimark-sacker" or _has_pair_near_circle(
+                                    g[0].multipliers, pt.multipliers))):
+                            loc = self.locate_p(prob, g[0], pt, k, tg[k], tf[k])
+                            if loc is None:
+                                loc = (pt, abs(pt.p - g[0].p))
+                            located.append(Located(kind, loc[0], loc[1], len(pts) - 1))
             if stop is not None and stop(pt):
                 pts.append(pt)
                 tfs.append(tf)
                 reason = "stop"
                 break
-            if self.detect and not jumped:
+            # test functions: along the step, or across a jump that kept the number of impacts
+            # (a natural-parameter step where the corrector failed: the map is smooth there
+            # as far as the impacts go; period doublings and Neimark-Sacker points are then
+            # located by bisection in p, folds not: p does not parametrise a fold)
+            if self.detect and (not jumped or pt.n_impacts == prev.n_impacts):
                 for k, kind in enumerate(KINDS):
+                    if jumped and kind == "fold":
+                        continue
                     if np.sign(tf[k]) != np.sign(tfs[-1][k]) and tf[k] != 0:
                         if kind == "neimark-sacker" and not _has_pair_near_circle(
                                 pts[-1].multipliers, pt.multipliers):
                             continue
-                        loc = self.locate(prob, z, t, ds, k, tfs[-1][k], tf[k], prev.corr)
+                        if jumped:
+                            loc = self.locate_p(prob, prev, pt, k, tfs[-1][k], tf[k])
+                        else:
+                            loc = self.locate(prob, z, t, ds, k, tfs[-1][k], tf[k], prev.corr)
                         if loc is None:  # not located: the bracket is the step
                             loc = (pt, abs(pt.p - prev.p))
                         located.append(Located(kind, loc[0], loc[1], len(pts) - 1))
@@ -407,10 +455,11 @@ class Tracer:
 
         def solve_at(u, p):
             """The quasi-Newton corrector at fixed p (the bordering row fixes p)."""
-            zs, evs, _ = self.correct(prob, np.r_[u / w, p / wp], e_p, pt.corr)
+            zs, evs, _ = self.correct(prob, np.r_[u / w, p / wp], e_p, pt.corr, fixed_p=True)
             return zs, evs
 
         def accept(zs, evs):
+            self.complete_jacobian(prob, evs)
             return zs, evs, tangent(evs.B, e_p)
 
         for rel in self.jump_steps:
@@ -456,7 +505,8 @@ class Tracer:
                 e_p = np.zeros(len(u_lo) + 1)
                 e_p[-1] = 1.0
                 try:
-                    zs, ev, _ = self.correct(prob, np.r_[u_lo / w, pm / wp], e_p, pa.corr)
+                    zs, ev, _ = self.correct(prob, np.r_[u_lo / w, pm / wp], e_p, pa.corr,
+                                             fixed_p=True)
                 except ConvergenceError:
                     hi_p = pm  # no solution continuing the near side: beyond the grazing point
                     continue
@@ -484,6 +534,47 @@ class Tracer:
         return best, abs(best.p - lo_p)
 
     # --- bifurcation location -----------------------------------------------------------------
+    def locate_p(self, prob, pa, pb, k, g_a, g_b):
+        """Illinois regula falsi in p between the points pa and pb (a jump: a natural-parameter
+        step), solving at fixed p from the linear interpolation of their unknowns, until the
+        bracket's width is below bif_tol * |p|. Returns (Point, tolerance), or None when a
+        solve fails or leaves the stretch (another number of impacts)."""
+        w, wp = prob.scale_u, prob.scale_p
+        if pa.problem is not prob or pb.problem is not prob:
+            return None
+        e_p = np.zeros(len(w) + 1)
+        e_p[-1] = 1.0
+        lo, hi, glo, ghi = pa.p, pb.p, g_a, g_b
+        best, side = None, 0
+        for _ in range(60):
+            p = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
+            if not (min(lo, hi) < p < max(lo, hi)):
+                p = 0.5 * (lo + hi)
+            lam = (p - pa.p) / (pb.p - pa.p)
+            u = pa.u + lam * (pb.u - pa.u)
+            try:
+                zs, evs, _ = self.correct(prob, np.r_[u / w, p / wp], e_p, fixed_p=True)
+            except ConvergenceError:
+                return None
+            pt = self._point(prob, zs, evs)
+            if pt.n_impacts != pa.n_impacts or pt.multipliers is None:
+                return None
+            g = self._tests(pt)[k]
+            best = pt
+            if np.sign(g) == np.sign(glo):
+                lo, glo = p, g
+                if side == -1:
+                    ghi *= 0.5
+                side = -1
+            else:
+                hi, ghi = p, g
+                if side == 1:
+                    glo *= 0.5
+                side = 1
+            if abs(hi - lo) <= self.bif_tol * abs(p) or g == 0:
+                break
+        return best, abs(hi - lo)
+
     def locate(self, prob, z_a, t_a, ds, k, g_a, g_b, C_a=None):
         """Illinois regula falsi on the arclength step from z_a (test function k), until the
         bracket's width in p is below bif_tol * |p|. Returns (Point, tolerance) or None."""

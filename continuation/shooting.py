@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 import nlbeam
+from nlbeam.integrate import FlowMap
 
 from ._newton import ConvergenceError, ContinuationWarning, newton
 
@@ -53,6 +54,12 @@ class Integrator:
         ratio = max(1.0, fn / frequency)
         level = 2 ** int(math.ceil(math.log2(ratio) - 1e-12))
         return int(math.ceil(_BASE_STEPS[self.method] * level / self.dt_scale))
+
+
+def ex_period_dt(ex, steps_per_period):
+    """The fixed step (s) of steps_per_period steps per period of the harmonic excitation ex
+    (None: the integrator's default, for the adaptive method)."""
+    return 1.0 / (ex.frequency * steps_per_period) if steps_per_period else None
 
 
 def event_elements(model):
@@ -104,6 +111,7 @@ class ShootingProblem:
         self.n = self.N2 * self.n_seg
         self.out = model.output_dof
         self._cache = (None, None)
+        self._fm = None  # the last FlowMap (see _flowmap)
         p0 = self.value()
         if steps_per_period is None:
             m, A, f = self.setup(p0)
@@ -150,12 +158,26 @@ class ShootingProblem:
                 dt = dur
             yield j, t0, dur, dt
 
+    def _flowmap(self, model, ex):
+        """A FlowMap (nlbeam.integrate.FlowMap: nlbeam.flow without its per-call checks) of
+        model and excitation ex with this problem's integrator: the last one, retargeted to
+        ex when only the excitation changed."""
+        fm = self._fm
+        if fm is None or fm.model is not model:
+            it = self.integrator
+            fm = FlowMap(model, ex, method=it.method, dt=ex_period_dt(ex, self.steps_per_period),
+                         steps_per_contact=it.steps_per_contact, rtol=it.rtol, atol=it.atol)
+            self._fm = fm
+            return fm
+        if fm.excitation == ex:
+            return fm
+        self._fm = fm = fm.retarget(ex)
+        return fm
+
     def _flow(self, model, ex, s, t0, dur, dt, mono):
-        it = self.integrator
         try:
-            return nlbeam.flow(model, ex, s, t0, dur, monodromy=mono, method=it.method, dt=dt,
-                               steps_per_contact=it.steps_per_contact, rtol=it.rtol,
-                               atol=it.atol, max_steps=int(50 * dur / dt) + 20000, warn=False)
+            return self._flowmap(model, ex)(s, t0, dur, monodromy=mono, dt=dt,
+                                            max_steps=int(50 * dur / dt) + 20000)
         except nlbeam.IntegrationError as exc:
             # an iterate far from any orbit (e.g. a huge penetration): a failed Newton step
             raise ConvergenceError(f"shooting: integration failed ({exc}); try a smaller step, "
@@ -470,6 +492,7 @@ class Evaluation:
     n_impacts: int = 0  # contact onsets over the period
     B: np.ndarray | None = None  # scaled [dR/du | dR/dp] of the quasi-Newton corrector
     C: np.ndarray | None = None  # its secant correction (continuation.pathfollow.Tracer.correct)
+    lazy_p: object = None  # (start, its evaluation) of a corrector at fixed p (dR/dp left out)
 
 
 @dataclass

@@ -2,6 +2,7 @@
 (the end state of one interval, optionally with its monodromy matrix)."""
 from __future__ import annotations
 
+import copy
 import math
 import warnings
 import weakref
@@ -315,3 +316,138 @@ def flow(model, excitation, state0, t0, duration, *, monodromy=False, disc0=None
     return Flow(state=s_end, disc=disc_end, xmax=xmax, n_impacts=int(c[4]), monodromy=M,
                 dstate_dvminus0=dS_dv, dvminus_dstate0=dv_dS, dvminus_dvminus0=dv_dv,
                 n_steps=int(c[1]), n_rhs=int(c[3]), min_steps_per_contact=int(c[5]))
+
+
+class FlowMap:
+    """``flow`` of one model and excitation over many intervals, with the per-call Python work
+    done once: the arguments are validated and the kernel's arrays prepared at construction,
+    and each call integrates one interval with the same kernel call as ``flow`` (bitwise the
+    same result; tests/nlbeam/test_flowmap.py). For callers that integrate thousands of short
+    intervals (shooting and continuation), where ``flow``'s checks cost as much as the
+    integration. ``dt``: the fixed step (adjusted down per call, as in ``flow``, so that the
+    duration is a whole number of steps); ``max_steps``: per interval, as in ``flow``."""
+
+    def __init__(self, model, excitation, *, method="rk4", dt=None, steps_per_contact=None,
+                 rtol=1e-10, atol=1e-14, events=True, graded=True):
+        lo, hi = excitation.time_span()
+        t_lo = lo if math.isfinite(lo) else 0.0
+        # the same checks as flow, on a representative span (each call checks its own span)
+        self.dt, self.spc = _prepare(model, excitation, method, dt, steps_per_contact, t_lo,
+                                     t_lo + 1.0 if not math.isfinite(hi) else hi)
+        self.model, self.excitation, self.method = model, excitation, method
+        self.meth = METHODS[method]
+        self.sysa = model.kernel_arrays()
+        self.xc, self.xp, self.xtab = excitation.kernel_args()
+        self.kernel = model.kernels().integrate_kernel
+        self.span = (lo, hi)
+        self.rtol, self.atol = float(rtol), float(atol)
+        self.events, self.graded = bool(events), bool(graded)
+        self.h_init_cap = 1e-3 / max(excitation.max_frequency(), 1.0)
+        N, ne = model.n_dof, model.n_elements
+        self.N, self.ne = N, ne
+        self.geometry = model.element_geometry()
+        self.event_el = [e for e in range(ne) if _k.has_event(self.geometry[0][e])]
+        self._empty1 = np.empty(0)
+        self._empty2 = np.empty((0, 2 * N))
+        self._empty_e = np.empty((0, ne))
+        self._ev_log = np.zeros((0, 4))
+        self._dt_checked = self.dt
+
+    def retarget(self, excitation):
+        """This map for another excitation (same model, method, dt, tolerances): only the
+        excitation's kernel arguments are renewed."""
+        new = copy.copy(self)
+        new.excitation = excitation
+        new.xc, new.xp, new.xtab = excitation.kernel_args()
+        new.span = excitation.time_span()
+        new.h_init_cap = 1e-3 / max(excitation.max_frequency(), 1.0)
+        return new
+
+    def _disc(self, s0, t0):
+        """The contact state at t0 of a state s0 by flow's start-in-contact rule."""
+        disc = np.zeros((self.ne, 2))
+        if self.event_el:
+            et, w, wy, gap = self.geometry
+            N = self.N
+            y, yd, _, st = _k.excite(float(t0), self.xc, self.xp, self.xtab)  # as evaluate
+            if st != 0:
+                raise ValueError("t: outside the time span the excitation is defined on "
+                                 f"({self.span})")
+            for e in self.event_el:
+                d = w[e] @ s0[:N] + wy[e] * y - gap[e]
+                dd = w[e] @ s0[N:] + wy[e] * yd
+                if d > 0:
+                    disc[e, 0] = 1.0
+                    disc[e, 1] = dd if dd > _k.VMINUS_FLOOR else _k.VMINUS_FLOOR
+        return disc
+
+    def __call__(self, state0, t0, duration, *, monodromy=False, disc0=None, dt=None,
+                 max_steps=100_000_000):
+        """The Flow from ``state0`` (2N,) at t0 (s) over ``duration`` (s), as
+        ``flow(model, excitation, state0, t0, duration, ...)`` with this map's settings; dt (s)
+        overrides the map's step for this call. Raises IntegrationError as flow does."""
+        if not duration > 0:
+            raise ValueError(f"duration: must be > 0 s, got {duration!r}")
+        t_end = t0 + duration
+        lo, hi = self.span
+        tol = 1e-9 * max(abs(t0), abs(t_end), 1.0)
+        if t0 < lo - tol or t_end > hi + tol:
+            raise ValueError(f"t_end: the span [{t0}, {t_end}] s must lie inside the "
+                             f"excitation's span [{lo}, {hi}] s")
+        if dt is None:
+            dt = self.dt
+        else:
+            dt = float(dt)
+            if dt > self._dt_checked:  # a longer step than checked so far: flow's checks
+                positive("dt", dt, unit="s")
+                if self.method in _STABILITY:
+                    _check_stable_step(self.model, self.excitation, self.method, dt)
+                self._dt_checked = dt
+            elif not dt > 0:
+                raise ValueError(f"dt: must be > 0 s, got {dt!r}")
+        if self.method != "adaptive":
+            dt = duration / math.ceil(duration / dt - 1e-9)
+        N, ne = self.N, self.ne
+        s0 = np.array(state0, dtype=float).ravel()
+        if s0.shape != (2 * N,) or not np.all(np.isfinite(s0)):
+            raise ValueError(f"x0: must be a finite state [x_1..x_N, v_1..v_N] of length {2 * N}")
+        if disc0 is None:
+            disc = self._disc(s0, t0)
+        else:
+            disc = np.array(disc0, dtype=float).reshape(ne, 2)
+        in_contact = bool(np.any(disc[:, 0] != 0))
+        if monodromy:
+            m = 2 * N + (ne if in_contact else 0)
+            P0 = np.zeros((2 * N, m))
+            P0[:, :2 * N] = np.eye(2 * N)
+            dvm0 = np.zeros((ne, m))
+            if in_contact:
+                dvm0[:, 2 * N:] = np.eye(ne)
+        else:
+            P0 = np.zeros((2 * N, 1))
+            dvm0 = np.zeros((ne, 1))
+        s_end = np.empty(2 * N)
+        disc_end = np.empty((ne, 2))
+        P_end = np.empty_like(P0)
+        dvm_end = np.empty_like(dvm0)
+        xmax = np.zeros(N)
+        c = np.zeros(8, dtype=np.int64)
+        fc = np.zeros(2)
+        status = self.kernel(self.sysa, self.xc, self.xp, self.xtab, self.meth, float(t0),
+                             float(t_end), dt, self.spc, self.rtol, self.atol,
+                             min(dt, self.h_init_cap), int(max_steps), s0, disc, self.events,
+                             bool(monodromy), P0, dvm0, True, 0, self.graded, self._empty1,
+                             self._empty2, self._empty_e, self._empty_e, self._ev_log, s_end,
+                             disc_end, P_end, dvm_end, xmax, c, fc)
+        if status != 0:
+            raise IntegrationError(_status_message(status, fc[0], self.method))
+        if monodromy:
+            M = P_end[:, :2 * N].copy()
+            dS_dv = P_end[:, 2 * N:].copy() if in_contact else None
+            dv_dS = dvm_end[:, :2 * N].copy()
+            dv_dv = dvm_end[:, 2 * N:].copy() if in_contact else None
+        else:
+            M = dS_dv = dv_dS = dv_dv = None
+        return Flow(state=s_end, disc=disc_end, xmax=xmax, n_impacts=int(c[4]), monodromy=M,
+                    dstate_dvminus0=dS_dv, dvminus_dstate0=dv_dS, dvminus_dvminus0=dv_dv,
+                    n_steps=int(c[1]), n_rhs=int(c[3]), min_steps_per_contact=int(c[5]))
