@@ -14,11 +14,14 @@ Two parts, for ModalBeam.paper(n_modes=N), A = 0.1 mm:
      Richardson), so its tolerance is the integrator's error and the differences between
      successive N are the truncation's; for N up to 8 (--modes).
    Prints the tables, the differences between successive N and the fitted decay exponent p of
-   |q(N) - q(N_max)| ~ N^-p. CPU time of this process (time.process_time); about 3 min CPU for
-   the defaults on a shared 2-core machine (N = 8 dominates).
+   |q(N) - q(N_max)| ~ N^-p, and the diagram's CPU per branch point against N. CPU time of
+   this process (time.process_time): about 4 min for the defaults on a shared 2-core machine
+   (N = 7's refinement, which falls back to 4 shooting segments, and N = 8's trace dominate);
+   --quick about 10 s. N = 10 in (b) takes about 4 min more (trace only: larger N than 8 are not
+   refined, see study(refine_max=...)).
 2. The cost of a 400 s stochastic record (0-200 Hz, rms 0.1 mm; --duration to shorten) and its
    PSD peaks and moments of delta, for N = 1, 2, 4, 8 (--record-modes), each cost fitted as a
-   power law in N (--no-records skips it; about 3 min CPU).
+   power law in N (--no-records skips it; about 1.5 min CPU).
 
 Run: python benchmarks/modal_scaling.py [--quick] [--no-study] [--no-records] [--duration S]
 (--quick: N = 1..4 in the study, 100 s records of N = 1, 2, 4). Timings vary with the machine
