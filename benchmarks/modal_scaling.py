@@ -89,16 +89,18 @@ def first_instability(n, sol, f=F_START, window=WINDOW, scales=REFINE_SCALES):
     out = dict(n=n, trace_cpu=ct, points=frc.n_points, top=top, kind=None, f_diagram=np.nan,
                value=np.nan, tol=np.nan, values=(), refine_cpu=0.0, note="",
                warnings=[str(w.message).split(".")[0] for w in caught])
+    if not sol.stable:
+        out["note"] = f"the orbit at {f} Hz is unstable: not a loss of stability; "
     cand = [b for b in frc.bifurcations if b.kind in ("fold", "period-doubling")
             and b.frequency > f]
     if not cand:
-        out["note"] = ("none in the window" if top >= window[1]
-                       else f"none: the branch ends at {top:.4f} Hz")
+        out["note"] += ("none in the window" if top >= window[1]
+                        else f"none: the branch ends at {top:.4f} Hz")
         return out
     bf = cand[0]
     out.update(kind=bf.kind, f_diagram=bf.frequency, xmax=bf.xmax)
     if not scales:
-        out["note"] = "not refined (cost); diagram bracket"
+        out["note"] += "not refined (cost); diagram bracket"
         out["value"], out["tol"] = bf.frequency, bf.tolerance
         return out
     levels = tuple(Integrator(dt_scale=s, steps_per_contact=32 / s) for s in scales)
@@ -112,10 +114,12 @@ def first_instability(n, sol, f=F_START, window=WINDOW, scales=REFINE_SCALES):
             err = exc
     else:
         out["refine_cpu"] = time.process_time() - c
-        out["note"] = f"not refined ({str(err)[:60]}...); diagram bracket"
+        out["note"] += f"not refined ({str(err)[:60]}...); diagram bracket"
         out["value"], out["tol"] = bf.frequency, bf.tolerance
         return out
     out["refine_cpu"] = time.process_time() - c
+    if segs > 1:
+        out["note"] += f"refined with {segs} shooting segments (1 did not converge)"
     out.update(value=r.value, tol=max(r.tolerance, 0.0), values=tuple(r.values))
     return out
 
@@ -164,9 +168,12 @@ def study(modes, amp_modes, refine_max=8):
         d = "" if (prev is None or not np.isfinite(prev) or not np.isfinite(r["value"])) \
             else f"{r['value'] - prev:+.4f}"
         prev = r["value"]
-        print(f"| {n} | {r['kind'] or '-'} | {r['f_diagram']:.6f} | {r['value']:.6f} | "
-              f"{r['tol']:.1e} | {d} | {r['top']:.4f} | {r['points']} | {r['trace_cpu']:.1f} | "
-              f"{r['refine_cpu']:.1f} | {r['note']} |", flush=True)
+        def fmt(v, spec):
+            return "-" if not np.isfinite(v) else format(v, spec)
+        print(f"| {n} | {r['kind'] or '-'} | {fmt(r['f_diagram'], '.6f')} | "
+              f"{fmt(r['value'], '.6f')} | {fmt(r['tol'], '.1e')} | {d} | {r['top']:.4f} | "
+              f"{r['points']} | {r['trace_cpu']:.1f} | {r['refine_cpu']:.1f} | {r['note']} |",
+              flush=True)
         for w in r["warnings"]:
             print(f"  (N = {n}: {w})")
     cost = [(r["n"], r["trace_cpu"] / r["points"]) for r in rows if r["n"] >= 2 and r["points"]]
