@@ -4,13 +4,14 @@ from __future__ import annotations
 import math
 import os
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
 import nlbeam
 
-from ._newton import ConvergenceError
+from ._newton import ContinuationWarning, ConvergenceError
 from .pathfollow import Tracer
 from .shooting import (Integrator, ShootingProblem, _problem_from_state, decay_rate,
                        solve_problem)
@@ -23,7 +24,12 @@ class Branch:
     stable (n,) bool; multipliers (n, 2N) complex (largest modulus first), both None when the
     diagram was computed with stability=False (stability unknown); state0 (n, 2N) the
     state at t = 0; states (n, m, 2N) at the shooting boundaries, boundaries (n, m) their
-    excitation phases (periods); origin: 'brute-force', 'period-doubling' or 'start'."""
+    excitation phases (periods); origin: 'brute-force', 'period-doubling' or 'start'; ends:
+    why the trace stopped at the first and at the last point ('left the parameter range',
+    'closed', 'stop' (ran onto a traced branch, or a switched branch back at its period
+    doubling), 'period-doubling' (the first point of a switched branch), 'step underflow'
+    (the corrector failed at every step size down to ds_min: a non-smooth or too unstable
+    map), 'no progress', 'max_points', 'could not move the segment boundaries'; '' unknown)."""
 
     order: int
     parameter: str
@@ -37,6 +43,7 @@ class Branch:
     states: np.ndarray
     boundaries: np.ndarray
     origin: str = "start"
+    ends: tuple = ("", "")
 
 
 @dataclass
@@ -119,6 +126,7 @@ class FrequencyResponse:
                     gb.attrs["order"] = b.order
                     gb.attrs["parameter"] = b.parameter
                     gb.attrs["origin"] = b.origin
+                    gb.attrs["ends"] = np.array([str(e) for e in b.ends], dtype="S64")
                     for name in ("values", "frequency", "amplitude", "xmax", "stable",
                                  "multipliers", "state0", "states", "boundaries"):
                         if getattr(b, name) is not None:  # stable, multipliers: None without
@@ -175,6 +183,8 @@ def load(path):
             frc.branches.append(Branch(
                 order=int(gb.attrs["order"]), parameter=s(gb.attrs["parameter"]),
                 origin=s(gb.attrs["origin"]),
+                ends=tuple(e.decode() for e in gb.attrs["ends"]) if "ends" in gb.attrs
+                else ("", ""),
                 **{n: gb[n][()] if n in gb else None
                    for n in ("values", "frequency", "amplitude", "xmax", "stable",
                              "multipliers", "state0", "states", "boundaries")}))
@@ -202,7 +212,7 @@ def load(path):
 
 
 # --- building branches ---------------------------------------------------------------------------
-def _to_branch(points, order, parameter, origin):
+def _to_branch(points, order, parameter, origin, ends=("", "")):
     n = len(points)
     probs = [p.problem for p in points]
     values = np.array([p.p for p in points])
@@ -222,14 +232,16 @@ def _to_branch(points, order, parameter, origin):
                   xmax=np.array([p.xmax for p in points]),
                   stable=stable, multipliers=mu, state0=np.array(st0),
                   states=np.array([p.u.reshape(pr.n_seg, pr.N2) for p, pr in zip(points, probs)]),
-                  boundaries=np.array([pr.boundaries for pr in probs]), origin=origin)
+                  boundaries=np.array([pr.boundaries for pr in probs]), origin=origin,
+                  ends=tuple(ends))
 
 
 def _both_ways(tracer, prob, u, p, stop=None):
+    """Trace from (u, p) both ways: (points, located, (reason at the first point, at the last))."""
     fwd, loc_f, reason = tracer.trace(prob, u, p, direction=1, stop=stop)
     if reason == "closed":
-        return fwd, loc_f
-    bwd, loc_b, _ = tracer.trace(prob, u, p, direction=-1, stop=stop)
+        return fwd, loc_f, ("closed", "closed")
+    bwd, loc_b, reason_b = tracer.trace(prob, u, p, direction=-1, stop=stop)
 
     nb = len(bwd)
     pts = bwd[::-1][:-1] + fwd
@@ -237,7 +249,7 @@ def _both_ways(tracer, prob, u, p, stop=None):
         L.index = nb - 2 - L.index
     for L in loc_f:
         L.index += nb - 1
-    return pts, loc_b + loc_f
+    return pts, loc_b + loc_f, (reason_b, reason)
 
 
 def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=1e-3):
@@ -408,7 +420,7 @@ def _trace_switched(tracer, pt, order, branches=(), pd_values=()):
                                     t0=(z1 - z0) / np.linalg.norm(z1 - z0))
     if _halves_distance(pts[0]) < 1e-6:
         return None
-    return pts, loc
+    return pts, loc, ("period-doubling", reason)
 
 
 def _overlap_stop(branches, order, skip=0):
@@ -467,12 +479,11 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
         cand = brute_force(model, amplitude, grid, orders, integrator)
         say(f"brute-force grid: {len(cand)} periodic attractors at {n_grid} frequencies "
             f"({time.perf_counter() - t_start:.1f} s)")
-    for s in starts:
-        cand.append(s)
+    cand = [(f, n, s0, False) for (f, n, s0) in cand] + [(f, n, s0, True) for (f, n, s0) in starts]
 
-    def add(points, located, order, origin):
+    def add(points, located, order, origin, ends):
         bi = len(branches)
-        br = _to_branch(points, order, parameter, origin)
+        br = _to_branch(points, order, parameter, origin, ends)
         branches.append(br)
         n_bifs = len(bifs)
         for L in located:
@@ -487,12 +498,12 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                 pd_points.append((L.point, order, bi))
         lo, hi = float(np.min(br.frequency)), float(np.max(br.frequency))
         say(f"branch {bi + 1} (order {order}, {origin}): {lo:.6g}-{hi:.6g} Hz, "
-            f"{len(br.values)} points, {len(bifs) - n_bifs} bifurcations "
-            f"({time.perf_counter() - t_start:.1f} s)")
+            f"{len(br.values)} points, {len(bifs) - n_bifs} bifurcations, ends: "
+            f"{br.ends[0]} / {br.ends[1]} ({time.perf_counter() - t_start:.1f} s)")
 
     handled = set()
     for order in sorted(orders):
-        for (f, n, s0) in cand:
+        for (f, n, s0, asked) in cand:
             if n != order:
                 continue
             A = amplitude
@@ -506,7 +517,13 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                     prob.scale_p = max(abs(prob.value()), 1e-300)
                     pval = prob.value()
                 sol_prob, u, p = _polish(prob, u0, pval, tracer.tol)
-            except ConvergenceError:
+            except (ConvergenceError, nlbeam.IntegrationError) as err:
+                if asked:  # a start given by the caller; the grid's are dropped quietly
+                    warnings.warn(
+                        f"continuation: the start at {f:.9g} Hz (order {order}) did not converge"
+                        f" and was dropped ({err}); give a better state (from integration to "
+                        "the attractor, or a PeriodicSolution's state0), finer integration or "
+                        "segments=4", ContinuationWarning, stacklevel=3)
                 continue
             if sol_prob.minimal_order(u, p) != order:
                 continue
@@ -515,9 +532,9 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                           lambda: _shifted_states(sol_prob, u, p)) is not None:
                 continue
             tracer.label = f"order-{order} branch (from {f:.6g} Hz)"
-            pts, loc = _both_ways(tracer, sol_prob, u, p, stop=_overlap_stop(branches, order))
-            add(pts, loc, order, "brute-force" if len(starts) == 0 or (f, n, s0) not in starts
-                else "start")
+            pts, loc, ends = _both_ways(tracer, sol_prob, u, p,
+                                        stop=_overlap_stop(branches, order))
+            add(pts, loc, order, "start" if asked else "brute-force", ends)
         # branch switching at period doublings of this order
         if switch and 2 * order in orders:
             for k, (pt, o, bi) in enumerate(pd_points):
@@ -530,14 +547,35 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                                       [q.p for q, o2, _ in pd_points if o2 == order])
                 if res is None:
                     continue
-                pts, loc = res
-                add(pts, loc, 2 * order, "period-doubling")
+                pts, loc, ends = res
+                add(pts, loc, 2 * order, "period-doubling", ends)
                 end = pts[-1]
                 for k2, (pt2, o2, bi2) in enumerate(pd_points):
                     if o2 == order and k2 not in handled and \
                             abs(pt2.p - end.p) < 1e-3 * abs(end.p) + 1e-12:
                         handled.add(k2)
     return branches, bifs, time.perf_counter() - t_start
+
+
+_EARLY_ENDS = ("step underflow", "max_points", "could not move the segment boundaries")
+
+
+def _warn_early_ends(branches, p_range):
+    """One ContinuationWarning listing the branch ends inside p_range where the tracer gave up
+    (not where a branch left the range, closed, or ran onto another branch)."""
+    lo, hi = min(p_range), max(p_range)
+    where = []
+    for i, b in enumerate(branches):
+        for reason, v in ((b.ends[0], b.values[0]), (b.ends[1], b.values[-1])):
+            if reason in _EARLY_ENDS and lo < v < hi:
+                where.append(f"branch {i + 1} (order {b.order}) at {v:.6g} ({reason})")
+    if where:
+        warnings.warn(
+            f"continuation: {len(where)} branch end(s) inside the range where the tracer gave up: "
+            + "; ".join(where) + ". The diagram may miss what lies beyond them; try finer "
+            "integration (dt_scale=0.5, steps_per_contact=64), multiple shooting (segments=4), "
+            "a smaller ds_max or max_points larger. Branch.ends says why each branch ended.",
+            ContinuationWarning, stacklevel=3)
 
 
 def _polish(prob, u0, p, tol):
@@ -645,6 +683,7 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
                                      tracer, integrator, segments, n_grid,
                                      switch and stability, list(starts), brute_force_grid,
                                      variational=stability, progress=progress)
+    _warn_early_ends(branches, (f_lo, f_hi))
     sup = _superharmonics(branches, model, integrator)
     frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=float(amplitude),
                             parameter="frequency", p_range=(f_lo, f_hi), branches=branches,
@@ -673,8 +712,9 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
     prob.parameter = parameter
     prob.scale_p = max(abs(prob.value()), 1e-300)
     prob, u, p = _polish(prob, u0, prob.value(), tol)
-    pts, loc = _both_ways(tracer, prob, u, p)
-    br = _to_branch(pts, solution.order, parameter, "start")
+    pts, loc, ends = _both_ways(tracer, prob, u, p)
+    br = _to_branch(pts, solution.order, parameter, "start", ends)
+    _warn_early_ends([br], (lo, hi))
     bifs = []
     for L in loc:
         m_, A_, f_ = L.point.problem.setup(L.point.p)

@@ -154,3 +154,22 @@ def test_no_progress_rule_stops_the_branch_loudly():
                       match=r"test branch made no progress near 0\.\d+ .*dt_scale=0\.5"):
         pts, _, reason = tracer.trace(prob, u0, 0.3)
     assert reason == "no progress" and len(pts) == 6
+
+
+def test_every_branch_says_why_it_ended_and_early_ends_are_loud(tmp_path):
+    """Branch.ends records why the trace stopped at each end; an end inside the range where the
+    tracer gave up (here: the point budget) raises one ContinuationWarning naming it, and a start
+    given by the caller that does not converge is not dropped silently."""
+    m = nlbeam.Duffing(m=1.0, b=0.1, k=1.0, k3=1.0)
+    kw = dict(orders=(1,), n_grid=3, dt_scale=0.2, switch=False)
+    full = C.frequency_response(m, F, (0.1, 0.5), **kw)
+    assert [b.ends for b in full.branches] == [("left the parameter range",) * 2]
+    with pytest.warns(C.ContinuationWarning, match=r"branch 1 \(order 1\) at [0-9.]+ \(max_points\)"):
+        short = C.frequency_response(m, F, (0.1, 0.5), max_points=5, **kw)
+    (b,) = short.branches
+    assert b.ends == ("left the parameter range", "max_points") and 0.1 < b.values[-1] < 0.5
+    short.save(tmp_path / "short.h5")
+    assert C.load(tmp_path / "short.h5").branches[0].ends == b.ends
+    bad = (0.3, 1, np.array([1e9, -1e9]))  # far from any orbit: Newton cannot converge
+    with pytest.warns(C.ContinuationWarning, match="start at 0.3 Hz .order 1. did not converge"):
+        C.frequency_response(m, F, (0.1, 0.5), brute_force_grid=False, starts=[bad], **kw)
