@@ -809,6 +809,28 @@ def delta_extremum(e, sign, t, h, s, s_new, f0, f1, sysa, xc, xp, xtab):
     return th, xw + sysa[6][e] * ym - sysa[7][e]
 
 
+@njit(cache=True, inline="always")
+def _may_cross(e, t, h, s, s_new, disc, sysa, xc, xp, xtab):
+    """The cheap part of ``_crossing``, inlined into the integrator's loop: False when that
+    function would certainly report no boundary in the step (delta_e at the step end on the
+    element's own side, and no extremum of delta_e towards the boundary inside the step).
+    The same expressions as ``_crossing`` and ``kinematics``, so the same decision bit for bit;
+    it saves the call (~25 arrays) on the steps where nothing happens, nearly all of them."""
+    sign = -1.0 if disc[e, 0] != 0.0 else 1.0
+    ew = sysa[5]
+    N = ew.shape[1]
+    y0, yd0, st = excite_yyd(t, xc, xp, xtab)
+    y1, yd1, st = excite_yyd(t + h, xc, xp, xtab)
+    d1 = sysa[6][e] * y1 - sysa[7][e]
+    dd0 = sysa[6][e] * yd0
+    dd1 = sysa[6][e] * yd1
+    for j in range(N):
+        d1 += ew[e, j] * s_new[j]
+        dd0 += ew[e, j] * s[N + j]
+        dd1 += ew[e, j] * s_new[N + j]
+    return sign * d1 > 0.0 or (sign * dd0 > 0.0 and sign * dd1 < 0.0)
+
+
 @njit(cache=True)
 def _crossing(meth, t, h, s, s_new, f0, f1, P, dvm, disc, e, sysa, xc, xp, xtab,
               s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w):
@@ -1199,6 +1221,8 @@ def _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_
             if events_on:
                 for e in range(ne):
                     if not has_event(etype[e]):
+                        continue
+                    if not _may_cross(e, t, t_new - t, s, s_new, disc, sysa, xc, xp, xtab):
                         continue
                     tau, st = _crossing(meth, t, t_new - t, s, s_new, f0, f1, P, dvm, disc, e,
                                         sysa, xc, xp, xtab, s_try, dummyP, KS, KP, ytmp, Ptmp,
