@@ -1191,9 +1191,9 @@ def _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_
                 if h < 1e-14 * max(abs(t), 1.0):
                     status = ERR_STEP_UNDERFLOW
                     break
-            if not fixed and not want_var:
-                # the adaptive step without variational equations: straight to the unrolled
-                # step (what rk_step would call), one call level less per step
+            if not want_var and meth != RK2:
+                # without variational equations: straight to the unrolled RK4/DP5 step (what
+                # rk_step would call), one call level less per step
                 st = _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_new,
                                     KS, KP, ytmp, fel, err_w)
             else:
@@ -1227,8 +1227,9 @@ def _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_
                     f1[q] = KS[6, q]
                 st = 0
             else:
-                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0],
-                           fel)
+                # f at the step end (the next step's stage 1), inlined: the same values as deriv
+                st = deriv_plain(t_new, s_new, P_new, dvm, disc, sysa, xc, xp, xtab, f1, KP[0],
+                                 fel)
                 n_rhs += 1
             if st != 0:
                 status = st
