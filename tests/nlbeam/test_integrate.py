@@ -311,3 +311,15 @@ def test_the_inlined_right_hand_side_is_deriv_bit_for_bit():
     # outside the sampled table both report the range error
     xc, xp, xtab = excitations[1].kernel_args()
     assert K.excite_yyd(0.5, xc, xp, xtab)[2] == K.excite(0.5, xc, xp, xtab)[3] == K.ERR_EXCITATION_RANGE
+
+
+def test_xmax_is_the_max_of_the_dense_output():
+    # xmax is refined on the quintic dense output only where a velocity changes sign and a
+    # bound says the quintic could exceed the running max; a wrong skip leaves xmax below the
+    # dense-output samples of some step (the adaptive steps are long, the grid fine here)
+    exc = nlbeam.CosineSum([23.0, 61.0, 137.0], [1e-4, 5e-5, 2e-5], [0.0, 1.0, 2.0])
+    tr = nlbeam.integrate(PAPER, exc, 0.4, method="adaptive", dt=1e-5, x0=[-2e-4, 0.0])
+    assert tr.n_impacts > 5
+    top = np.max(np.abs(tr.x[:, 0]))
+    assert top <= tr.xmax[0] * (1 + 1e-14)
+    assert tr.xmax[0] <= top * (1 + 1e-6)
