@@ -143,6 +143,39 @@ def excite(t, code, p, tab):
 
 
 @njit(cache=True)
+def excite_yyd(t, code, p, tab):
+    """(y, y', status) at time t: ``excite`` without y'' (what a right-hand side needs). The
+    sampled table (code 1) is evaluated by the same expressions as in ``excite`` (bit for bit
+    the same y, y'), without the y'' polynomial."""
+    if code != 1:
+        y, yd, ydd, st = excite(t, code, p, tab)
+        return y, yd, st
+    h = p[1]
+    n = tab.shape[0]
+    u = (t - p[0]) / h
+    if u < -1e-9 or u > (n - 1) + 1e-9:
+        return 0.0, 0.0, ERR_EXCITATION_RANGE
+    i = int(math.floor(u))
+    if i < 0:
+        i = 0
+    if i > n - 2:
+        i = n - 2
+    th = u - i
+    th2 = th * th
+    th3 = th2 * th
+    h00 = 2.0 * th3 - 3.0 * th2 + 1.0
+    h10 = th3 - 2.0 * th2 + th
+    h01 = -2.0 * th3 + 3.0 * th2
+    h11 = th3 - th2
+    y = h00 * tab[i, 0] + h10 * h * tab[i, 1] + h01 * tab[i + 1, 0] + h11 * h * tab[i + 1, 1]
+    if math.isnan(tab[i, 2]):
+        yd = (1.0 - th) * tab[i, 1] + th * tab[i + 1, 1]
+    else:
+        yd = h00 * tab[i, 1] + h10 * h * tab[i, 2] + h01 * tab[i + 1, 1] + h11 * h * tab[i + 1, 2]
+    return y, yd, 0
+
+
+@njit(cache=True)
 def excitation_many(code, p, tab, t, out):
     """Evaluate (y, y') at every t into out (n, 2); status of the first failure."""
     for i in range(t.shape[0]):
@@ -265,6 +298,43 @@ def deriv(t, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, ks, kP, fel):
     return 0
 
 
+@njit(cache=True, inline="always")
+def deriv_plain(t, s, P, dvm, disc, sysa, xc, xp, xtab, ks, kP, fel):
+    """``deriv`` without variational equations, for the explicit steps: the same operations in
+    the same order (bit for bit the same ks and fel), inlined (numba IR) into the unrolled
+    Runge-Kutta step: a call with the ~15 arrays of the system exploded into ~100 scalar
+    arguments cost about 30 ns, half of a 1-DOF right-hand side."""
+    if _HAS_USER:
+        return deriv(t, s, P, dvm, disc, False, sysa, xc, xp, xtab, ks, kP, fel)
+    MinvK = sysa[0]
+    MinvC = sysa[1]
+    mek = sysa[2]
+    mec = sysa[3]
+    etype = sysa[4]
+    epar = sysa[8]
+    mw = sysa[9]
+    N = MinvK.shape[0]
+    ne = etype.shape[0]
+    y, yd, st = excite_yyd(t, xc, xp, xtab)
+    if st != 0:
+        return st
+    for i in range(N):
+        ks[i] = s[N + i]
+        acc = mek[i] * y + mec[i] * yd
+        for j in range(N):
+            acc -= MinvK[i, j] * s[j] + MinvC[i, j] * s[N + j]
+        ks[N + i] = acc
+    for e in range(ne):
+        d, dd = kinematics(e, s, y, yd, sysa)
+        f, dfd, dfdd, dfdv = element_force(etype[e], epar[e], d, dd, disc[e, 1], disc[e, 0])
+        fel[e] = f
+        if f == 0.0 and dfd == 0.0 and dfdd == 0.0:
+            continue
+        for i in range(N):
+            ks[N + i] -= mw[e, i] * f
+    return 0
+
+
 @njit(cache=True)
 def _user_force_terms(t, s, P, want_var, y, yd, sysa, ks, kP):
     """Add M^-1 q of the custom generalised force q(t, x, v, y, y') (N); for the variational
@@ -346,17 +416,17 @@ def _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, K
     if meth == RK4:
         for q in range(n):
             ytmp[q] = s[q] + h * 0.5 * KS[0, q]
-        st = deriv(t + 0.5 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[1], KP[1], fel)
+        st = deriv_plain(t + 0.5 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[1], KP[1], fel)
         if st != 0:
             return st
         for q in range(n):
             ytmp[q] = s[q] + h * 0.5 * KS[1, q]
-        st = deriv(t + 0.5 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[2], KP[2], fel)
+        st = deriv_plain(t + 0.5 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[2], KP[2], fel)
         if st != 0:
             return st
         for q in range(n):
             ytmp[q] = s[q] + h * 1.0 * KS[2, q]
-        st = deriv(t + 1.0 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[3], KP[3], fel)
+        st = deriv_plain(t + 1.0 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[3], KP[3], fel)
         if st != 0:
             return st
         for q in range(n):
@@ -371,20 +441,20 @@ def _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, K
     # DP5
     for q in range(n):
         ytmp[q] = s[q] + h * _D21 * KS[0, q]
-    st = deriv(t + _DC2 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[1], KP[1], fel)
+    st = deriv_plain(t + _DC2 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[1], KP[1], fel)
     if st != 0:
         return st
     for q in range(n):
         acc = s[q] + h * _D31 * KS[0, q]
         ytmp[q] = acc + h * _D32 * KS[1, q]
-    st = deriv(t + _DC3 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[2], KP[2], fel)
+    st = deriv_plain(t + _DC3 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[2], KP[2], fel)
     if st != 0:
         return st
     for q in range(n):
         acc = s[q] + h * _D41 * KS[0, q]
         acc += h * _D42 * KS[1, q]
         ytmp[q] = acc + h * _D43 * KS[2, q]
-    st = deriv(t + _DC4 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[3], KP[3], fel)
+    st = deriv_plain(t + _DC4 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[3], KP[3], fel)
     if st != 0:
         return st
     for q in range(n):
@@ -392,7 +462,7 @@ def _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, K
         acc += h * _D52 * KS[1, q]
         acc += h * _D53 * KS[2, q]
         ytmp[q] = acc + h * _D54 * KS[3, q]
-    st = deriv(t + _DC5 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[4], KP[4], fel)
+    st = deriv_plain(t + _DC5 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[4], KP[4], fel)
     if st != 0:
         return st
     for q in range(n):
@@ -401,7 +471,7 @@ def _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, K
         acc += h * _D63 * KS[2, q]
         acc += h * _D64 * KS[3, q]
         ytmp[q] = acc + h * _D65 * KS[4, q]
-    st = deriv(t + 1.0 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[5], KP[5], fel)
+    st = deriv_plain(t + 1.0 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[5], KP[5], fel)
     if st != 0:
         return st
     for q in range(n):
@@ -414,7 +484,7 @@ def _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, K
         s_out[q] = acc
         if not math.isfinite(acc):
             return ERR_NONFINITE
-    st = deriv(t + 1.0 * h, ytmp, P, dvm, disc, False, sysa, xc, xp, xtab, KS[6], KP[6], fel)
+    st = deriv_plain(t + 1.0 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[6], KP[6], fel)
     if st != 0:
         return st
     for q in range(n):
@@ -689,15 +759,24 @@ def contact_step(e, v0, a0, sysa, spc):
     return tc / spc
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _store(n_stored, t, s, disc, xc, xp, xtab, sysa, out_t, out_s, out_d, out_f):
-    y, yd, ydd, st = excite(t, xc, xp, xtab)
+    """Write sample n_stored: t, s, and delta and force of every element. Inlined into the
+    integrator's loop, with y'' skipped and the penetration computed in place (the same
+    expressions as ``kinematics``): a call with the system's arrays cost ~100 ns a sample."""
+    y, yd, st = excite_yyd(t, xc, xp, xtab)
     etype = sysa[4]
+    ew = sysa[5]
+    N = ew.shape[1]
     out_t[n_stored] = t
     for q in range(s.shape[0]):
         out_s[n_stored, q] = s[q]
     for e in range(etype.shape[0]):
-        d, dd = kinematics(e, s, y, yd, sysa)
+        d = sysa[6][e] * y - sysa[7][e]
+        dd = sysa[6][e] * yd
+        for j in range(N):
+            d += ew[e, j] * s[j]
+            dd += ew[e, j] * s[N + j]
         out_d[n_stored, e] = d
         f, a1, a2, a3 = element_force(etype[e], sysa[8][e], d, dd, disc[e, 1], disc[e, 0])
         out_f[n_stored, e] = f
@@ -737,6 +816,28 @@ def delta_extremum(e, sign, t, h, s, s_new, f0, f1, sysa, xc, xp, xtab):
     xw, xwd = hermite5(wx0, wv0, wa0, wx1, wv1, wa1, h, th)
     ym, ydm, yddm, st2 = excite(t + th * h, xc, xp, xtab)
     return th, xw + sysa[6][e] * ym - sysa[7][e]
+
+
+@njit(cache=True, inline="always")
+def _may_cross(e, t, h, s, s_new, disc, sysa, xc, xp, xtab):
+    """The cheap part of ``_crossing``, inlined into the integrator's loop: False when that
+    function would certainly report no boundary in the step (delta_e at the step end on the
+    element's own side, and no extremum of delta_e towards the boundary inside the step).
+    The same expressions as ``_crossing`` and ``kinematics``, so the same decision bit for bit;
+    it saves the call (~25 arrays) on the steps where nothing happens, nearly all of them."""
+    sign = -1.0 if disc[e, 0] != 0.0 else 1.0
+    ew = sysa[5]
+    N = ew.shape[1]
+    y0, yd0, st = excite_yyd(t, xc, xp, xtab)
+    y1, yd1, st = excite_yyd(t + h, xc, xp, xtab)
+    d1 = sysa[6][e] * y1 - sysa[7][e]
+    dd0 = sysa[6][e] * yd0
+    dd1 = sysa[6][e] * yd1
+    for j in range(N):
+        d1 += ew[e, j] * s_new[j]
+        dd0 += ew[e, j] * s[N + j]
+        dd1 += ew[e, j] * s_new[N + j]
+    return sign * d1 > 0.0 or (sign * dd0 > 0.0 and sign * dd1 < 0.0)
 
 
 @njit(cache=True)
@@ -1090,8 +1191,14 @@ def _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_
                 if h < 1e-14 * max(abs(t), 1.0):
                     status = ERR_STEP_UNDERFLOW
                     break
-            st = rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
-                         s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+            if not want_var and meth != RK2:
+                # without variational equations: straight to the unrolled RK4/DP5 step (what
+                # rk_step would call), one call level less per step
+                st = _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_new,
+                                    KS, KP, ytmp, fel, err_w)
+            else:
+                st = rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
+                             s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
             n_rhs += ns - (0 if want_var else 1)
             if st != 0:
                 status = st
@@ -1120,8 +1227,9 @@ def _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_
                     f1[q] = KS[6, q]
                 st = 0
             else:
-                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0],
-                           fel)
+                # f at the step end (the next step's stage 1), inlined: the same values as deriv
+                st = deriv_plain(t_new, s_new, P_new, dvm, disc, sysa, xc, xp, xtab, f1, KP[0],
+                                 fel)
                 n_rhs += 1
             if st != 0:
                 status = st
@@ -1129,6 +1237,8 @@ def _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_
             if events_on:
                 for e in range(ne):
                     if not has_event(etype[e]):
+                        continue
+                    if not _may_cross(e, t, t_new - t, s, s_new, disc, sysa, xc, xp, xtab):
                         continue
                     tau, st = _crossing(meth, t, t_new - t, s, s_new, f0, f1, P, dvm, disc, e,
                                         sysa, xc, xp, xtab, s_try, dummyP, KS, KP, ytmp, Ptmp,
@@ -1177,7 +1287,24 @@ def _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_
             if disc[e, 0] != 0.0:
                 steps_in_contact[e] += 1
         if track_xmax:
-            step_extrema(s, f0, s_new, f1, t_new - t, N, xmax)
+            # the refinement on the dense output only where a velocity changes sign and the
+            # quintic can exceed the current max: |x(theta)| <= max(|x0|, |x1|) + h (|v0| + |v1|)
+            # max|H1| + h^2 (|a0| + |a1|) max|H2| (H0 + H3 = 1, both in [0, 1]; max|H4| = max|H1|
+            # = 16/81, max|H5| = max|H2| = 0.01728), so a skipped refinement could not have
+            # raised xmax: the same xmax bit for bit, without most of the bisections
+            refine = False
+            hh = t_new - t
+            for i in range(N):
+                a = abs(s_new[i])
+                if a > xmax[i]:
+                    xmax[i] = a
+                if s[N + i] * s_new[N + i] < 0.0:
+                    bnd = (max(abs(s[i]), a) + hh * 0.19754 * (abs(s[N + i]) + abs(s_new[N + i]))
+                           + hh * hh * 0.017281 * (abs(f0[N + i]) + abs(f1[N + i])))
+                    if bnd * (1.0 + 1e-12) >= xmax[i]:
+                        refine = True
+            if refine:
+                step_extrema(s, f0, s_new, f1, t_new - t, N, xmax)
         if fixed and graded and n_in == 1 and disc[pe, 0] != 0.0 and t_new > t:
             # the maximum penetration of this contact sets where the graded exit phase starts
             y0, yd0, ydd0, st2 = excite(t, xc, xp, xtab)

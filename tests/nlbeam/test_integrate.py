@@ -265,3 +265,62 @@ def test_too_few_steps_per_contact_warns(monkeypatch):
     with pytest.warns(RuntimeWarning, match="steps_per_contact"):
         tr = nlbeam.integrate(PAPER, F40, 0.1, dt=1e-4, steps_per_contact=4, graded=False)
     assert 0 < tr.min_steps_per_contact < 10_000
+
+
+def test_the_inlined_right_hand_side_is_deriv_bit_for_bit():
+    # the unrolled RK4/DP5 steps evaluate the field with deriv_plain (inlined, y'' skipped via
+    # excite_yyd); it must give exactly deriv's accelerations and element forces, or every
+    # fixed-step and adaptive result would silently change
+    from nlbeam import _kernels as K
+
+    rng = np.random.default_rng(5)
+    n = 61
+    y = 1e-4 * rng.normal(size=n)
+    yd = 1e-2 * rng.normal(size=n)
+    excitations = [F40, nlbeam.Sampled(0.0, 1e-3, y, yd, rng.normal(size=n)),
+                   nlbeam.Sampled(0.0, 1e-3, y, yd),          # y'' omitted: NaN column
+                   nlbeam.CosineSum([10.0, 33.0], [1e-4, 2e-5], [0.1, 1.0])]
+    models = [PAPER, PAPER.replace(contact="hertz"),
+              PAPER.replace(contact="hunt-crossley", mu=1e3),
+              nlbeam.ModalBeam.paper(n_modes=3)]
+    for model in models:
+        sysa = model.kernel_arrays()
+        N, ne = model.n_dof, model.n_elements
+        P, kP, dvm = np.zeros((2 * N, 1)), np.zeros((2 * N, 1)), np.zeros((ne, 1))
+        for exc in excitations:
+            xc, xp, xtab = exc.kernel_args()
+            for t in (0.0, 0.0123456, 0.0371, 0.06):
+                y0 = exc.evaluate([t])[0][0]
+                yy = K.excite(t, xc, xp, xtab)
+                assert K.excite_yyd(t, xc, xp, xtab) == (yy[0], yy[1], yy[3])
+                for pen, inside in ((-1e-5, 0.0), (3e-6, 1.0), (3e-6, 0.0), (-1e-7, 1.0)):
+                    s = 1e-3 * rng.normal(size=2 * N)
+                    # put the contact point at penetration pen: delta = w.x + wy*y - gap
+                    _, w, wy, gap = model.element_geometry()
+                    s[:N] += w[0] * (pen - (w[0] @ s[:N] + wy[0] * y0 - gap[0])) / (w[0] @ w[0])
+                    disc = np.array([[inside, 0.05]] * ne)
+                    ks1, ks2 = np.zeros(2 * N), np.zeros(2 * N)
+                    f1, f2 = np.zeros(ne), np.zeros(ne)
+                    st1 = K.deriv(t, s, P, dvm, disc, False, sysa, xc, xp, xtab, ks1, kP, f1)
+                    st2 = K.deriv_plain(t, s, P, dvm, disc, sysa, xc, xp, xtab, ks2, kP, f2)
+                    assert st1 == st2 == 0
+                    np.testing.assert_array_equal(ks1, ks2)
+                    np.testing.assert_array_equal(f1, f2)
+                    if inside and pen > 0:
+                        assert f1[0] > 0.0
+    # outside the sampled table both report the range error
+    xc, xp, xtab = excitations[1].kernel_args()
+    assert K.excite_yyd(0.5, xc, xp, xtab)[2] == K.ERR_EXCITATION_RANGE
+    assert K.excite(0.5, xc, xp, xtab)[3] == K.ERR_EXCITATION_RANGE
+
+
+def test_xmax_is_the_max_of_the_dense_output():
+    # xmax is refined on the quintic dense output only where a velocity changes sign and a
+    # bound says the quintic could exceed the running max; a wrong skip leaves xmax below the
+    # dense-output samples of some step (the adaptive steps are long, the grid fine here)
+    exc = nlbeam.CosineSum([23.0, 61.0, 137.0], [1e-4, 5e-5, 2e-5], [0.0, 1.0, 2.0])
+    tr = nlbeam.integrate(PAPER, exc, 0.4, method="adaptive", dt=1e-5, x0=[-2e-4, 0.0])
+    assert tr.n_impacts > 5
+    top = np.max(np.abs(tr.x[:, 0]))
+    assert top <= tr.xmax[0] * (1 + 1e-14)
+    assert tr.xmax[0] <= top * (1 + 1e-6)
