@@ -1,7 +1,8 @@
 """Command line: ``nlbeam demo | frc | simulate | compare | run | figures``.
 
 Units everywhere: SI (m, s, kg, N), frequencies in Hz. Progress goes to stderr; ``--quiet``
-silences it. On failure: a one-line cause on stderr and exit status 2 (130 if interrupted).
+silences it. A warning is one line on stderr (``nlbeam CMD: warning: ...``), --quiet or not. On
+failure: a one-line cause on stderr and exit status 2 (130 if interrupted).
 """
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import argparse
 import os
 import sys
 import time
+import warnings
 
 _UNITS = ("Units: displacements and amplitudes in m (1e-4 = 0.1 mm), frequencies in Hz, "
           "times in s, K_hertz in N/m^1.5.")
@@ -303,12 +305,14 @@ def _figures(args):
 def _parser():
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--quiet", action="store_true", default=argparse.SUPPRESS,
-                        help="print nothing but errors (for scripts)")
+                        help="no progress and no results (for scripts); warnings and "
+                        "errors still go to stderr, one line each")
     parser = argparse.ArgumentParser(
         prog="nlbeam", description="Periodic and stochastic dynamics of a beam with an elastic "
         "stop (the paper model: m = 37.75e-3 kg, k = 736.3 N/m, b = 0.16 kg/s, K_hertz = "
         "2.1e8 N/m^1.5, e = 0.5). " + _UNITS, epilog="Exit status 0 on success, 2 on error.")
-    parser.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress and no results; warnings and errors still go to stderr")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("demo", parents=[common], help="a short version of `nlbeam figures`: "
@@ -414,8 +418,16 @@ def main(argv=None):
     args = parser.parse_args(argv)
     if not hasattr(args, "quiet"):
         args.quiet = False
+    def show(message, category, filename, lineno, file=None, line=None):
+        # a warning (accuracy, a branch that ended early, a record that gained energy) is one
+        # line on stderr, --quiet or not: it says what to change
+        print(f"nlbeam {args.command}: warning: {str(message).strip()}", file=sys.stderr,
+              flush=True)
+
     try:
-        return args.func(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = show
+            return args.func(args)
     except KeyboardInterrupt:
         print(f"nlbeam {args.command}: interrupted", file=sys.stderr)
         return 130

@@ -44,7 +44,9 @@ def test_demo_is_a_short_nlbeam_figures(tmp_path, capsys):
     assert not out.exists()
     assert main(["demo", "--out", str(out), "--quiet"]) == 0
     cap = capsys.readouterr()
-    assert cap.out == "" and cap.err == ""
+    # --quiet: no progress, no results; warnings (one line each) still reach stderr
+    assert cap.out == "" and all(ln.startswith("nlbeam demo: warning: ")
+                                 for ln in cap.err.splitlines()), cap.err
     assert sorted(f for f in os.listdir(out) if not f.startswith(".")) == DEMO_FILES
     for f in DEMO_FILES:
         if f.endswith(".png"):
@@ -133,3 +135,23 @@ def test_frc_simulate_compare(tmp_path, capsys):
     assert os.path.getsize(png) > 1000
     assert main(["compare", sto, frc, "--f-max", "0"]) == 2
     assert "--f-max: must be > 0 Hz" in capsys.readouterr().err
+
+
+def test_a_warning_is_one_line_naming_the_command(tmp_path, capsys, monkeypatch):
+    import warnings
+
+    import continuation
+
+    frc0 = continuation.frequency_response
+
+    def frc(*a, **k):
+        warnings.warn("continuation: a branch ended early; try segments=4",
+                      continuation.ContinuationWarning)
+        return frc0(*a, **k)
+
+    monkeypatch.setattr(continuation, "frequency_response", frc)
+    out = str(tmp_path / "frc.h5")
+    assert main(["frc", "--amplitude", "1e-4", "--f-range", "42", "44", "--orders", "1",
+                 "--n-grid", "2", "--out", out, "--quiet"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err == ["nlbeam frc: warning: continuation: a branch ended early; try segments=4"]
