@@ -49,9 +49,11 @@ def plot_frequency_response(frc, ax=None, *, scale=1e3, unit="mm", grazing=True)
         # labels closer than 12 % of the axis are stacked, so that their texts do not overlap
         level = level + 1 if last is not None and sh.frequency - last < 0.12 * span else 0
         last = sh.frequency
+        frac = (sh.frequency - min(frc.p_range)) / span  # near an edge: text inwards
+        ha, dx = ("left", -8) if frac < 0.12 else ("right", 8) if frac > 0.88 else ("center", 0)
         ax.annotate(f"superharmonic k = {sh.harmonic}\n{sh.frequency:.2f} Hz",
                     (sh.frequency, sh.xmax * scale), textcoords="offset points",
-                    xytext=(0, 18 + 26 * level), ha="center", fontsize=8,
+                    xytext=(dx, 18 + 26 * level), ha=ha, fontsize=8,
                     arrowprops=dict(arrowstyle="-", lw=0.6))
     ax.set_xlim(*frc.p_range)
     ax.set_xlabel("excitation frequency [Hz]" if frc.parameter == "frequency" else frc.parameter)
