@@ -293,19 +293,30 @@ def flow(model, excitation, state0, t0, duration, *, monodromy=False, disc0=None
     N = model.n_dof
     ne = model.n_elements
     in_contact = bool(np.any(disc[:, 0] != 0))
-    if monodromy:
-        m = 2 * N + (ne if in_contact else 0)
-        P0 = np.zeros((2 * N, m))
-        P0[:, :2 * N] = np.eye(2 * N)
-        dvm0 = np.zeros((ne, m))
-        if in_contact:
-            dvm0[:, 2 * N:] = np.eye(ne)
-    else:
-        P0 = np.zeros((2 * N, 1))
-        dvm0 = np.zeros((ne, 1))
+    P0, dvm0 = _sensitivity_seed(N, ne, in_contact, monodromy)
     (_, _, _, _, s_end, disc_end, P, dvm, xmax, c, fc, _) = _run(
         model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc, events,
         monodromy, P0, dvm0, True, 0, graded, 0, warn)
+    return _flow_result(s_end, disc_end, P, dvm, xmax, c, N, in_contact, monodromy)
+
+
+def _sensitivity_seed(N, ne, in_contact, monodromy):
+    """Initial sensitivities (P0 (2N, m), dvm0 (ne, m)): the identity on the state, and on the
+    onset velocities delta'_minus when the interval starts in contact; one dummy column
+    without monodromy."""
+    if not monodromy:
+        return np.zeros((2 * N, 1)), np.zeros((ne, 1))
+    m = 2 * N + (ne if in_contact else 0)
+    P0 = np.zeros((2 * N, m))
+    P0[:, :2 * N] = np.eye(2 * N)
+    dvm0 = np.zeros((ne, m))
+    if in_contact:
+        dvm0[:, 2 * N:] = np.eye(ne)
+    return P0, dvm0
+
+
+def _flow_result(s_end, disc_end, P, dvm, xmax, c, N, in_contact, monodromy):
+    """A Flow from the kernel's outputs (P, dvm: the sensitivities; c: its counters)."""
     if monodromy:
         M = P[:, :2 * N].copy()
         dS_dv = P[:, 2 * N:].copy() if in_contact else None
@@ -416,16 +427,7 @@ class FlowMap:
         else:
             disc = np.array(disc0, dtype=float).reshape(ne, 2)
         in_contact = bool(np.any(disc[:, 0] != 0))
-        if monodromy:
-            m = 2 * N + (ne if in_contact else 0)
-            P0 = np.zeros((2 * N, m))
-            P0[:, :2 * N] = np.eye(2 * N)
-            dvm0 = np.zeros((ne, m))
-            if in_contact:
-                dvm0[:, 2 * N:] = np.eye(ne)
-        else:
-            P0 = np.zeros((2 * N, 1))
-            dvm0 = np.zeros((ne, 1))
+        P0, dvm0 = _sensitivity_seed(N, ne, in_contact, monodromy)
         s_end = np.empty(2 * N)
         disc_end = np.empty((ne, 2))
         P_end = np.empty_like(P0)
@@ -441,13 +443,5 @@ class FlowMap:
                              disc_end, P_end, dvm_end, xmax, c, fc)
         if status != 0:
             raise IntegrationError(_status_message(status, fc[0], self.method))
-        if monodromy:
-            M = P_end[:, :2 * N].copy()
-            dS_dv = P_end[:, 2 * N:].copy() if in_contact else None
-            dv_dS = dvm_end[:, :2 * N].copy()
-            dv_dv = dvm_end[:, 2 * N:].copy() if in_contact else None
-        else:
-            M = dS_dv = dv_dS = dv_dv = None
-        return Flow(state=s_end, disc=disc_end, xmax=xmax, n_impacts=int(c[4]), monodromy=M,
-                    dstate_dvminus0=dS_dv, dvminus_dstate0=dv_dS, dvminus_dvminus0=dv_dv,
-                    n_steps=int(c[1]), n_rhs=int(c[3]), min_steps_per_contact=int(c[5]))
+        return _flow_result(s_end, disc_end, P_end, dvm_end, xmax, c, N, in_contact,
+                            monodromy)
