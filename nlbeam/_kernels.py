@@ -336,6 +336,68 @@ def deriv_plain(t, s, P, dvm, disc, sysa, xc, xp, xtab, ks, kP, fel):
     return 0
 
 
+@njit(cache=True, inline="always")
+def deriv_var(t, s, P, dvm, disc, sysa, xc, xp, xtab, ks, kP, fel):
+    """``deriv`` with the variational equations (want_var=True), for the unrolled RK4 steps:
+    the same operations in the same order (bit for bit the same ks, kP and fel), inlined into
+    the step as ``deriv_plain`` is, y'' skipped (``excite_yyd``)."""
+    if _HAS_USER:
+        return deriv(t, s, P, dvm, disc, True, sysa, xc, xp, xtab, ks, kP, fel)
+    y, yd, st = excite_yyd(t, xc, xp, xtab)
+    if st != 0:
+        return st
+    return _deriv_var_at(y, yd, s, P, dvm, disc, sysa, ks, kP, fel)
+
+
+@njit(cache=True, inline="always")
+def _deriv_var_at(y, yd, s, P, dvm, disc, sysa, ks, kP, fel):
+    """The body of ``deriv_var`` with the excitation (y, y') given, so that two stages at the
+    same time (RK4's 2nd and 3rd) evaluate it once (the same doubles: it is deterministic).
+    Without the custom-force hook: callers check _HAS_USER."""
+    MinvK = sysa[0]
+    MinvC = sysa[1]
+    mek = sysa[2]
+    mec = sysa[3]
+    etype = sysa[4]
+    ew = sysa[5]
+    epar = sysa[8]
+    mw = sysa[9]
+    N = MinvK.shape[0]
+    ne = etype.shape[0]
+    m = P.shape[1]
+    for i in range(N):
+        ks[i] = s[N + i]
+        acc = mek[i] * y + mec[i] * yd
+        for j in range(N):
+            acc -= MinvK[i, j] * s[j] + MinvC[i, j] * s[N + j]
+        ks[N + i] = acc
+    for c in range(m):
+        for i in range(N):
+            kP[i, c] = P[N + i, c]
+            acc = 0.0
+            for j in range(N):
+                acc -= MinvK[i, j] * P[j, c] + MinvC[i, j] * P[N + j, c]
+            kP[N + i, c] = acc
+    for e in range(ne):
+        d, dd = kinematics(e, s, y, yd, sysa)
+        f, dfd, dfdd, dfdv = element_force(etype[e], epar[e], d, dd, disc[e, 1], disc[e, 0])
+        fel[e] = f
+        if f == 0.0 and dfd == 0.0 and dfdd == 0.0:
+            continue
+        for i in range(N):
+            ks[N + i] -= mw[e, i] * f
+        for c in range(m):
+            dx = 0.0
+            dv = 0.0
+            for j in range(N):
+                dx += ew[e, j] * P[j, c]
+                dv += ew[e, j] * P[N + j, c]
+            g = dfd * dx + dfdd * dv + dfdv * dvm[e, c]
+            for i in range(N):
+                kP[N + i, c] -= mw[e, i] * g
+    return 0
+
+
 @njit(cache=True)
 def _user_force_terms(t, s, P, want_var, y, yd, sysa, ks, kP):
     """Add M^-1 q of the custom generalised force q(t, x, v, y, y') (N); for the variational
@@ -498,6 +560,70 @@ def _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, K
     return 0
 
 
+@njit(cache=True, inline="always")
+def _stage_var(s, P, h, a, KSj, KPj, ytmp, Ptmp):
+    """An RK4 stage's state and sensitivities: ytmp = s + h a KSj, Ptmp = P + h a KPj (the
+    tableau loop's operations without its zero terms)."""
+    n = s.shape[0]
+    m = P.shape[1]
+    for q in range(n):
+        ytmp[q] = s[q] + h * a * KSj[q]
+    for q in range(n):
+        for c in range(m):
+            Ptmp[q, c] = P[q, c] + h * a * KPj[q, c]
+
+
+@njit(cache=True)
+def _rk_step_var(t, h, s, P, dvm, disc, sysa, xc, xp, xtab, s_out, P_out, KS, KP, ytmp, Ptmp,
+                 fel):
+    """rk_step of RK4 with the variational equations, unrolled, with the right-hand side and
+    its sensitivity inlined (``deriv_var``): the same operations in the same order as the
+    tableau loops up to their zero terms, so the same (s_out, P_out) bit for bit (a zero may
+    differ in sign). Stage 1 is evaluated, not taken from f0 (as in rk_step)."""
+    n = s.shape[0]
+    m = P.shape[1]
+    st = deriv_var(t + 0.0 * h, s, P, dvm, disc, sysa, xc, xp, xtab, KS[0], KP[0], fel)
+    if st != 0:
+        return st
+    _stage_var(s, P, h, 0.5, KS[0], KP[0], ytmp, Ptmp)
+    if _HAS_USER:
+        st = deriv_var(t + 0.5 * h, ytmp, Ptmp, dvm, disc, sysa, xc, xp, xtab, KS[1], KP[1], fel)
+        if st != 0:
+            return st
+        _stage_var(s, P, h, 0.5, KS[1], KP[1], ytmp, Ptmp)
+        st = deriv_var(t + 0.5 * h, ytmp, Ptmp, dvm, disc, sysa, xc, xp, xtab, KS[2], KP[2], fel)
+        if st != 0:
+            return st
+    else:
+        # stages 2 and 3 at the same time t + h/2: the excitation once
+        y, yd, st = excite_yyd(t + 0.5 * h, xc, xp, xtab)
+        if st != 0:
+            return st
+        _deriv_var_at(y, yd, ytmp, Ptmp, dvm, disc, sysa, KS[1], KP[1], fel)
+        _stage_var(s, P, h, 0.5, KS[1], KP[1], ytmp, Ptmp)
+        _deriv_var_at(y, yd, ytmp, Ptmp, dvm, disc, sysa, KS[2], KP[2], fel)
+    _stage_var(s, P, h, 1.0, KS[2], KP[2], ytmp, Ptmp)
+    st = deriv_var(t + 1.0 * h, ytmp, Ptmp, dvm, disc, sysa, xc, xp, xtab, KS[3], KP[3], fel)
+    if st != 0:
+        return st
+    for q in range(n):
+        acc = s[q] + h * _R6 * KS[0, q]
+        acc += h * _R3 * KS[1, q]
+        acc += h * _R3 * KS[2, q]
+        acc += h * _R6 * KS[3, q]
+        s_out[q] = acc
+        if not math.isfinite(acc):
+            return ERR_NONFINITE
+    for q in range(n):
+        for c in range(m):
+            acc = P[q, c] + h * _R6 * KP[0, q, c]
+            acc += h * _R3 * KP[1, q, c]
+            acc += h * _R3 * KP[2, q, c]
+            acc += h * _R6 * KP[3, q, c]
+            P_out[q, c] = acc
+    return 0
+
+
 @njit(cache=True)
 def rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
             s_out, P_out, KS, KP, ytmp, Ptmp, fel, err_w):
@@ -506,6 +632,12 @@ def rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
     if not want_var and meth != RK2:
         return _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, KS, KP,
                               ytmp, fel, err_w)
+    if not _HAS_USER and meth == RK4:
+        # (with a custom force, the module's copy keeps the loops below: _HAS_USER is a
+        # compile-time constant, the branch is pruned, and the unrolled steps, which would
+        # only call deriv, are not compiled: about 15 s less to compile, uncached)
+        return _rk_step_var(t, h, s, P, dvm, disc, sysa, xc, xp, xtab, s_out, P_out, KS, KP, ytmp,
+                            Ptmp, fel)
     A, B, BH, Cc = tableau(meth)
     ns = B.shape[0]
     n = s.shape[0]
@@ -553,6 +685,128 @@ def rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
     return 0
 
 
+@njit(cache=True, inline="always")
+def _graded_stage(mode, ui, ti, e, ys, Ps, dvm, disc, want_var, sysa, xc, xp, xtab, ks, kp,
+                  fel):
+    """A stage of the graded RK4 step at (ti, ys, Ps): the field (inlined) times the stage's
+    scale dt/du; (status, scale)."""
+    if want_var:
+        st = deriv_var(ti, ys, Ps, dvm, disc, sysa, xc, xp, xtab, ks, kp, fel)
+    else:
+        st = deriv_plain(ti, ys, Ps, dvm, disc, sysa, xc, xp, xtab, ks, kp, fel)
+    if st != 0:
+        return st, 0.0
+    if mode == 1:
+        sc = 2.0 * ui
+    else:
+        y, yd, st = excite_yyd(ti, xc, xp, xtab)
+        d, dd = kinematics(e, ys, y, yd, sysa)
+        if dd >= 0.0:
+            return ERR_EVENT, 0.0
+        sc = 2.0 * ui / dd
+    for q in range(ks.shape[0]):
+        ks[q] *= sc
+    if want_var:
+        for q in range(kp.shape[0]):
+            for c in range(kp.shape[1]):
+                kp[q, c] *= sc
+    return 0, sc
+
+
+@njit(cache=True)
+def _rk_step_graded4(mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, want_var, sysa, xc, xp,
+                     xtab, s_out, P_out, KS, KP, KT, ytmp, Ptmp, fel):
+    """rk_step_graded of RK4, unrolled, the field inlined (``deriv_plain`` / ``deriv_var``):
+    the same operations in the same order as the tableau loops, without their zero terms in
+    the stage states (the scalar stage times keep them), so the same result bit for bit (a
+    zero may differ in sign)."""
+    n = s.shape[0]
+    m = P.shape[1]
+    # stage 1 at (u0, s, P)
+    ui = u0 + 0.0 * hu
+    ti = t_ref + ui * ui if mode == 1 else tcur
+    st, sc = _graded_stage(mode, ui, ti, e, s, P, dvm, disc, want_var, sysa, xc, xp, xtab,
+                              KS[0], KP[0], fel)
+    if st != 0:
+        return st, tcur
+    KT[0] = sc
+    # stage 2
+    for q in range(n):
+        ytmp[q] = s[q] + hu * 0.5 * KS[0, q]
+    if want_var:
+        for q in range(n):
+            for c in range(m):
+                Ptmp[q, c] = P[q, c] + hu * 0.5 * KP[0, q, c]
+    ui = u0 + 0.5 * hu
+    ti = t_ref + ui * ui if mode == 1 else tcur + hu * 0.5 * KT[0]
+    st, sc = _graded_stage(mode, ui, ti, e, ytmp, Ptmp, dvm, disc, want_var, sysa, xc, xp,
+                              xtab, KS[1], KP[1], fel)
+    if st != 0:
+        return st, tcur
+    KT[1] = sc
+    # stage 3
+    for q in range(n):
+        ytmp[q] = s[q] + hu * 0.5 * KS[1, q]
+    if want_var:
+        for q in range(n):
+            for c in range(m):
+                Ptmp[q, c] = P[q, c] + hu * 0.5 * KP[1, q, c]
+    ui = u0 + 0.5 * hu
+    if mode == 1:
+        ti = t_ref + ui * ui
+    else:
+        ti = tcur + hu * 0.0 * KT[0]
+        ti += hu * 0.5 * KT[1]
+    st, sc = _graded_stage(mode, ui, ti, e, ytmp, Ptmp, dvm, disc, want_var, sysa, xc, xp,
+                              xtab, KS[2], KP[2], fel)
+    if st != 0:
+        return st, tcur
+    KT[2] = sc
+    # stage 4
+    for q in range(n):
+        ytmp[q] = s[q] + hu * 1.0 * KS[2, q]
+    if want_var:
+        for q in range(n):
+            for c in range(m):
+                Ptmp[q, c] = P[q, c] + hu * 1.0 * KP[2, q, c]
+    ui = u0 + 1.0 * hu
+    if mode == 1:
+        ti = t_ref + ui * ui
+    else:
+        ti = tcur + hu * 0.0 * KT[0]
+        ti += hu * 0.0 * KT[1]
+        ti += hu * 1.0 * KT[2]
+    st, sc = _graded_stage(mode, ui, ti, e, ytmp, Ptmp, dvm, disc, want_var, sysa, xc, xp,
+                              xtab, KS[3], KP[3], fel)
+    if st != 0:
+        return st, tcur
+    KT[3] = sc
+    for q in range(n):
+        acc = s[q] + hu * _R6 * KS[0, q]
+        acc += hu * _R3 * KS[1, q]
+        acc += hu * _R3 * KS[2, q]
+        acc += hu * _R6 * KS[3, q]
+        s_out[q] = acc
+        if not math.isfinite(acc):
+            return ERR_NONFINITE, tcur
+    if want_var:
+        for q in range(n):
+            for c in range(m):
+                acc = P[q, c] + hu * _R6 * KP[0, q, c]
+                acc += hu * _R3 * KP[1, q, c]
+                acc += hu * _R3 * KP[2, q, c]
+                acc += hu * _R6 * KP[3, q, c]
+                P_out[q, c] = acc
+    if mode == 1:
+        ue = u0 + hu
+        return 0, t_ref + ue * ue
+    tn = tcur + hu * _R6 * KT[0]
+    tn += hu * _R3 * KT[1]
+    tn += hu * _R3 * KT[2]
+    tn += hu * _R6 * KT[3]
+    return 0, tn
+
+
 @njit(cache=True)
 def rk_step_graded(meth, mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, want_var, sysa, xc, xp,
                    xtab, s_out, P_out, KS, KP, KT, ytmp, Ptmp, fel):
@@ -562,6 +816,9 @@ def rk_step_graded(meth, mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, want_var
     mode 1, onset: sigma = sqrt(t - t_ref), t_ref the onset time; d/dsigma = 2 sigma d/dt.
     mode 2, exit: u = sqrt(delta_e); t is integrated too, dt/du = 2u / delta_e'.
     Advances from u0 by hu (hu < 0 in mode 2). Returns (status, t at the end)."""
+    if not _HAS_USER and meth == RK4:
+        return _rk_step_graded4(mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, want_var, sysa, xc,
+                                xp, xtab, s_out, P_out, KS, KP, KT, ytmp, Ptmp, fel)
     A, B, BH, Cc = tableau(meth)
     ns = B.shape[0]
     n = s.shape[0]
@@ -1197,6 +1454,10 @@ def _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_
                 # rk_step would call), one call level less per step
                 st = _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_new,
                                     KS, KP, ytmp, fel, err_w)
+            elif not _HAS_USER and meth == RK4:
+                # with them: the unrolled RK4 step with the variational equations, likewise
+                st = _rk_step_var(t, h, s, P, dvm, disc, sysa, xc, xp, xtab, s_new, P_new, KS, KP,
+                                  ytmp, Ptmp, fel)
             else:
                 st = rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
                              s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)

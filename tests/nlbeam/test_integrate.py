@@ -314,6 +314,185 @@ def test_the_inlined_right_hand_side_is_deriv_bit_for_bit():
     assert K.excite(0.5, xc, xp, xtab)[3] == K.ERR_EXCITATION_RANGE
 
 
+def _field_cases():
+    """(model, excitation, t, s, disc) across the contact laws, excitation kinds and a 3-mode
+    beam, with the contact point put in and out of contact (the variational tests below)."""
+    rng = np.random.default_rng(7)
+    n = 61
+    y = 1e-4 * rng.normal(size=n)
+    yd = 1e-2 * rng.normal(size=n)
+    excitations = [F40, nlbeam.Sampled(0.0, 1e-3, y, yd, rng.normal(size=n)),
+                   nlbeam.Sampled(0.0, 1e-3, y, yd),
+                   nlbeam.CosineSum([10.0, 33.0], [1e-4, 2e-5], [0.1, 1.0])]
+    M = np.diag([0.03, 0.02])
+    K2 = np.array([[900.0, -300.0], [-300.0, 600.0]])
+    two_dof = nlbeam.System(M, 1e-4 * K2 + 0.1 * M, K2, elements=(
+        nlbeam.Contact(0, "lankarani-nikravesh", 2e8, e=0.6, gap=0.0),
+        nlbeam.PiecewiseLinearStop(1, 5e4, gap=0.0), nlbeam.CubicSpring(1, 1e9)))
+    models = [PAPER, PAPER.replace(contact="hertz"),
+              PAPER.replace(contact="hunt-crossley", mu=1e3),
+              nlbeam.ModalBeam.paper(n_modes=3), two_dof]
+    for model in models:
+        N, ne = model.n_dof, model.n_elements
+        _, w, wy, gap = model.element_geometry()
+        for exc in excitations:
+            for t in (0.0123456, 0.0371):
+                y0 = exc.evaluate([t])[0][0]
+                for pen, inside in ((-1e-5, 0.0), (3e-6, 1.0), (3e-6, 0.0), (-1e-7, 1.0)):
+                    s = 1e-3 * rng.normal(size=2 * N)
+                    s[:N] += w[0] * (pen - (w[0] @ s[:N] + wy[0] * y0 - gap[0])) / (w[0] @ w[0])
+                    disc = np.array([[inside, 0.05]] * ne)
+                    yield model, exc, t, s, disc, rng
+
+
+def _rk4_var_reference(K, t, h, s, P, dvm, disc, sysa, xc, xp, xtab):
+    """rk_step's tableau loops (RK4, with the variational equations) on the generic deriv, in
+    Python: the same floating-point operations in the same order."""
+    A, B, _, C = K._A_RK4, K._B_RK4, K._B_RK4, K._C_RK4
+    n, m = P.shape
+    KS, KP = np.zeros((4, n)), np.zeros((4, n, m))
+    fel = np.zeros(disc.shape[0])
+    for i in range(4):
+        ytmp = s.copy()
+        Ptmp = P.copy()
+        for j in range(i):
+            ytmp = ytmp + h * A[i, j] * KS[j]
+            Ptmp = Ptmp + h * A[i, j] * KP[j]
+        assert K.deriv(t + C[i] * h, ytmp, Ptmp, dvm, disc, True, sysa, xc, xp, xtab,
+                       KS[i], KP[i], fel) == 0
+    s_out, P_out = s.copy(), P.copy()
+    for j in range(4):
+        s_out = s_out + h * B[j] * KS[j]
+        P_out = P_out + h * B[j] * KP[j]
+    return s_out, P_out
+
+
+def test_the_inlined_variational_step_is_the_tableau_step_bit_for_bit():
+    # the RK4 step with variational equations is unrolled with deriv_var inlined (the
+    # monodromy of every shooting problem); deriv_var must be deriv(want_var=True) exactly, and
+    # the step the tableau loops' step exactly (their zero terms dropped: equal as numbers)
+    from nlbeam import _kernels as K
+
+    n_cases = 0
+    for model, exc, t, s, disc, rng in _field_cases():
+        sysa = model.kernel_arrays()
+        xc, xp, xtab = exc.kernel_args()
+        N, ne = model.n_dof, model.n_elements
+        m = 2 * N + ne
+        P = np.hstack([np.eye(2 * N), 0.1 * rng.normal(size=(2 * N, ne))]) + 0.01 * rng.normal(
+            size=(2 * N, m))
+        dvm = rng.normal(size=(ne, m))
+        ks1, ks2 = np.zeros(2 * N), np.zeros(2 * N)
+        kP1, kP2 = np.zeros((2 * N, m)), np.zeros((2 * N, m))
+        f1, f2 = np.zeros(ne), np.zeros(ne)
+        assert K.deriv(t, s, P, dvm, disc, True, sysa, xc, xp, xtab, ks1, kP1, f1) == 0
+        assert K.deriv_var(t, s, P, dvm, disc, sysa, xc, xp, xtab, ks2, kP2, f2) == 0
+        np.testing.assert_array_equal(ks1, ks2)
+        np.testing.assert_array_equal(kP1, kP2)
+        np.testing.assert_array_equal(f1, f2)
+        h = 2e-5
+        s_ref, P_ref = _rk4_var_reference(K, t, h, s, P, dvm, disc, sysa, xc, xp, xtab)
+        s_out, P_out = np.zeros(2 * N), np.zeros((2 * N, m))
+        KS, KP = np.zeros((4, 2 * N)), np.zeros((4, 2 * N, m))
+        st = K.rk_step(K.RK4, t, h, s, P, dvm, disc, True, sysa, xc, xp, xtab, ks1, s_out, P_out,
+                       KS, KP, np.zeros(2 * N), np.zeros((2 * N, m)), np.zeros(ne),
+                       np.zeros(2 * N))
+        assert st == 0
+        np.testing.assert_array_equal(s_out, s_ref)
+        np.testing.assert_array_equal(P_out, P_ref)
+        n_cases += 1
+    assert n_cases == 160
+
+
+def test_the_unrolled_graded_step_is_the_tableau_step_bit_for_bit():
+    # rk_step_graded (the steps in sqrt(t - t_onset) and sqrt(delta) at a contact's ends) is
+    # unrolled for RK4 with the field inlined; the reference is its tableau loops in Python
+    from nlbeam import _kernels as K
+
+    A, B, C = K._A_RK4, K._B_RK4, K._C_RK4
+    n_cases = 0
+    for model, exc, t, s, disc, rng in _field_cases():
+        if disc[0, 0] == 0.0:
+            continue
+        sysa = model.kernel_arrays()
+        xc, xp, xtab = exc.kernel_args()
+        N, ne = model.n_dof, model.n_elements
+        y, yd, _, _ = K.excite(t, xc, xp, xtab)
+        s[N:] -= 0.3 * np.abs(s[N:])  # mode 2 needs delta' < 0 on the step
+        dd0 = K.kinematics(0, s, y, yd, sysa)[1]
+        s[N:] += model.element_geometry()[1][0] * (-0.05 - dd0) / (
+            model.element_geometry()[1][0] @ model.element_geometry()[1][0])
+        m = 2 * N
+        P = np.eye(2 * N) + 0.01 * rng.normal(size=(2 * N, m))
+        dvm = rng.normal(size=(ne, m))
+        for mode, u0, hu in ((1, 0.0, 1e-3), (1, 2e-3, 1e-3), (2, 1.7e-3, -2e-4)):
+            for want_var in (True, False):
+                KS, KP, KT = np.zeros((4, 2 * N)), np.zeros((4, 2 * N, m)), np.zeros(4)
+                fel = np.zeros(ne)
+                t_ref = t - u0 * u0
+                for i in range(4):
+                    ytmp, Ptmp = s.copy(), P.copy()
+                    for j in range(i):
+                        ytmp = ytmp + hu * A[i, j] * KS[j]
+                        Ptmp = Ptmp + hu * A[i, j] * KP[j]
+                    ui = u0 + C[i] * hu
+                    if mode == 1:
+                        ti = t_ref + ui * ui
+                    else:
+                        ti = t
+                        for j in range(i):
+                            ti += hu * A[i, j] * KT[j]
+                    assert K.deriv(ti, ytmp, Ptmp, dvm, disc, want_var, sysa, xc, xp, xtab,
+                                   KS[i], KP[i], fel) == 0
+                    if mode == 1:
+                        sc = 2.0 * ui
+                    else:
+                        yi, ydi, _, _ = K.excite(ti, xc, xp, xtab)
+                        sc = 2.0 * ui / K.kinematics(0, ytmp, yi, ydi, sysa)[1]
+                    KT[i] = sc
+                    KS[i] *= sc
+                    KP[i] *= sc
+                s_ref, P_ref, t_end = s.copy(), P.copy(), t
+                for j in range(4):
+                    s_ref = s_ref + hu * B[j] * KS[j]
+                    P_ref = P_ref + hu * B[j] * KP[j]
+                    t_end += hu * B[j] * KT[j]
+                if mode == 1:
+                    t_end = t_ref + (u0 + hu) * (u0 + hu)
+                s_out, P_out = np.zeros(2 * N), np.zeros((2 * N, m))
+                st, tn = K.rk_step_graded(
+                    K.RK4, mode, u0, hu, t_ref, 0, s, t, P, dvm, disc, want_var, sysa, xc, xp,
+                    xtab, s_out, P_out, np.zeros((4, 2 * N)), np.zeros((4, 2 * N, m)),
+                    np.zeros(4), np.zeros(2 * N), np.zeros((2 * N, m)), np.zeros(ne))
+                assert st == 0
+                np.testing.assert_array_equal(s_out, s_ref)
+                assert tn == t_end
+                if want_var:
+                    np.testing.assert_array_equal(P_out, P_ref)
+                n_cases += 1
+    assert n_cases == 480
+
+
+def test_a_flows_monodromy_is_unchanged_by_the_unrolled_steps():
+    # values of main before the unrolled variational steps (62b6a2e), where they are the same
+    # bit for bit; the tolerance leaves room for another libm's last bits
+    f = nlbeam.flow(PAPER, F40, [0.0, 0.0], 0.0, 0.025, monodromy=True)
+    np.testing.assert_allclose(f.monodromy, [[0.7643562730355696, 0.0018813561055467272],
+                                             [-49.43899049299372, 0.49476422244390456]],
+                               rtol=1e-12)
+    np.testing.assert_allclose(f.dvminus_dstate0, [[-124.14332646811589, 0.5161102311861241]],
+                               rtol=1e-12)
+    # a start inside a contact: the sensitivity to the onset velocity too
+    f = nlbeam.flow(PAPER, F40, [1.03e-4, 0.02], 0.0, 0.025, monodromy=True)
+    assert f.n_impacts == 1
+    np.testing.assert_allclose(f.monodromy, [[4.68980057756389, 0.003537226142784413],
+                                             [-1276.4903409567921, -0.9285781025564721]],
+                               rtol=1e-12)
+    np.testing.assert_allclose(f.dstate_dvminus0, [[0.0018278964997235734],
+                                                   [-0.4819332575413209]], rtol=1e-12)
+    np.testing.assert_allclose(f.dvminus_dvminus0, [[-0.26795972037116533]], rtol=1e-12)
+
+
 def test_xmax_is_the_max_of_the_dense_output():
     # xmax is refined on the quintic dense output only where a velocity changes sign and a
     # bound says the quintic could exceed the running max; a wrong skip leaves xmax below the
