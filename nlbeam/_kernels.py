@@ -561,16 +561,17 @@ def _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, K
 
 
 @njit(cache=True, inline="always")
-def _stage_var(s, P, h, a, KSj, KPj, ytmp, Ptmp):
-    """An RK4 stage's state and sensitivities: ytmp = s + h a KSj, Ptmp = P + h a KPj (the
-    tableau loop's operations without its zero terms)."""
+def _stage_var(s, P, h, a, KSj, KPj, ytmp, Ptmp, want_var):
+    """An RK4 stage's state and (with want_var) sensitivities: ytmp = s + h a KSj, Ptmp = P +
+    h a KPj (the tableau loop's operations without its zero terms)."""
     n = s.shape[0]
     m = P.shape[1]
     for q in range(n):
         ytmp[q] = s[q] + h * a * KSj[q]
-    for q in range(n):
-        for c in range(m):
-            Ptmp[q, c] = P[q, c] + h * a * KPj[q, c]
+    if want_var:
+        for q in range(n):
+            for c in range(m):
+                Ptmp[q, c] = P[q, c] + h * a * KPj[q, c]
 
 
 @njit(cache=True)
@@ -585,12 +586,12 @@ def _rk_step_var(t, h, s, P, dvm, disc, sysa, xc, xp, xtab, s_out, P_out, KS, KP
     st = deriv_var(t + 0.0 * h, s, P, dvm, disc, sysa, xc, xp, xtab, KS[0], KP[0], fel)
     if st != 0:
         return st
-    _stage_var(s, P, h, 0.5, KS[0], KP[0], ytmp, Ptmp)
+    _stage_var(s, P, h, 0.5, KS[0], KP[0], ytmp, Ptmp, True)
     if _HAS_USER:
         st = deriv_var(t + 0.5 * h, ytmp, Ptmp, dvm, disc, sysa, xc, xp, xtab, KS[1], KP[1], fel)
         if st != 0:
             return st
-        _stage_var(s, P, h, 0.5, KS[1], KP[1], ytmp, Ptmp)
+        _stage_var(s, P, h, 0.5, KS[1], KP[1], ytmp, Ptmp, True)
         st = deriv_var(t + 0.5 * h, ytmp, Ptmp, dvm, disc, sysa, xc, xp, xtab, KS[2], KP[2], fel)
         if st != 0:
             return st
@@ -600,9 +601,9 @@ def _rk_step_var(t, h, s, P, dvm, disc, sysa, xc, xp, xtab, s_out, P_out, KS, KP
         if st != 0:
             return st
         _deriv_var_at(y, yd, ytmp, Ptmp, dvm, disc, sysa, KS[1], KP[1], fel)
-        _stage_var(s, P, h, 0.5, KS[1], KP[1], ytmp, Ptmp)
+        _stage_var(s, P, h, 0.5, KS[1], KP[1], ytmp, Ptmp, True)
         _deriv_var_at(y, yd, ytmp, Ptmp, dvm, disc, sysa, KS[2], KP[2], fel)
-    _stage_var(s, P, h, 1.0, KS[2], KP[2], ytmp, Ptmp)
+    _stage_var(s, P, h, 1.0, KS[2], KP[2], ytmp, Ptmp, True)
     st = deriv_var(t + 1.0 * h, ytmp, Ptmp, dvm, disc, sysa, xc, xp, xtab, KS[3], KP[3], fel)
     if st != 0:
         return st
@@ -731,12 +732,7 @@ def _rk_step_graded4(mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, want_var, sy
         return st, tcur
     KT[0] = sc
     # stage 2
-    for q in range(n):
-        ytmp[q] = s[q] + hu * 0.5 * KS[0, q]
-    if want_var:
-        for q in range(n):
-            for c in range(m):
-                Ptmp[q, c] = P[q, c] + hu * 0.5 * KP[0, q, c]
+    _stage_var(s, P, hu, 0.5, KS[0], KP[0], ytmp, Ptmp, want_var)
     ui = u0 + 0.5 * hu
     ti = t_ref + ui * ui if mode == 1 else tcur + hu * 0.5 * KT[0]
     st, sc = _graded_stage(mode, ui, ti, e, ytmp, Ptmp, dvm, disc, want_var, sysa, xc, xp,
@@ -745,12 +741,7 @@ def _rk_step_graded4(mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, want_var, sy
         return st, tcur
     KT[1] = sc
     # stage 3
-    for q in range(n):
-        ytmp[q] = s[q] + hu * 0.5 * KS[1, q]
-    if want_var:
-        for q in range(n):
-            for c in range(m):
-                Ptmp[q, c] = P[q, c] + hu * 0.5 * KP[1, q, c]
+    _stage_var(s, P, hu, 0.5, KS[1], KP[1], ytmp, Ptmp, want_var)
     ui = u0 + 0.5 * hu
     if mode == 1:
         ti = t_ref + ui * ui
@@ -763,12 +754,7 @@ def _rk_step_graded4(mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, want_var, sy
         return st, tcur
     KT[2] = sc
     # stage 4
-    for q in range(n):
-        ytmp[q] = s[q] + hu * 1.0 * KS[2, q]
-    if want_var:
-        for q in range(n):
-            for c in range(m):
-                Ptmp[q, c] = P[q, c] + hu * 1.0 * KP[2, q, c]
+    _stage_var(s, P, hu, 1.0, KS[2], KP[2], ytmp, Ptmp, want_var)
     ui = u0 + 1.0 * hu
     if mode == 1:
         ti = t_ref + ui * ui
