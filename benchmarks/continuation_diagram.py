@@ -29,6 +29,18 @@ import continuation as C  # noqa: E402
 A = 1e-4
 
 
+def harmonic_coverage(frc):
+    """One line: the frequency span the order-1 branches cover, and the gaps between them."""
+    iv = sorted((b.frequency.min(), b.frequency.max()) for b in frc.branches if b.order == 1)
+    gaps, hi = [], iv[0][1]
+    for lo_, hi_ in iv[1:]:
+        if lo_ > hi + 1e-9:
+            gaps.append((hi, lo_))
+        hi = max(hi, hi_)
+    return (f"harmonic branch covers {iv[0][0]:.3f}-{hi:.3f} Hz; gaps: "
+            + (", ".join(f"{a:.4f}-{b:.4f} Hz" for a, b in gaps) or "none"))
+
+
 def figure(frc):
     """figures/frc_paper.png: the whole diagram (log |x|max) above, 5-30 Hz below."""
     import matplotlib
@@ -73,14 +85,7 @@ def main(quick=False):
         print(f"  superharmonic resonance of order {s.harmonic} at {s.frequency:.4f} Hz "
               f"(+- {s.tolerance:.1e}), {s.xmax * 1e3:.5f} mm, harmonic {s.harmonic} / first "
               f"= {s.ratio:.2f}")
-    iv = sorted((b.frequency.min(), b.frequency.max()) for b in frc.branches if b.order == 1)
-    gaps, hi = [], iv[0][1]
-    for lo_, hi_ in iv[1:]:
-        if lo_ > hi + 1e-9:
-            gaps.append((hi, lo_))
-        hi = max(hi, hi_)
-    print(f"harmonic branch covers {iv[0][0]:.3f}-{hi:.3f} Hz; gaps: "
-          + (", ".join(f"{a:.4f}-{b:.4f} Hz" for a, b in gaps) or "none"))
+    print(harmonic_coverage(frc))
     graz = [b for b in frc.bifurcations if b.kind == "grazing" and b.order == 1]
     print("grazing points on the harmonic branch (Hz, bracket): "
           + ", ".join(f"{g.frequency:.5f} ({g.tolerance:.0e})" for g in graz))

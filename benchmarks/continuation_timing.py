@@ -23,6 +23,7 @@ import numpy as np  # noqa: E402
 import nlbeam  # noqa: E402
 
 import continuation as C  # noqa: E402
+from continuation_diagram import harmonic_coverage  # noqa: E402  (benchmarks/ is on sys.path)
 
 A = 1e-4
 
@@ -73,14 +74,7 @@ def main():
     for i, b in enumerate(frc.branches):
         print(f"  branch {i}: order {b.order} ({b.origin}), {len(b.values)} points, "
               f"{b.frequency.min():.4f}-{b.frequency.max():.4f} Hz")
-    iv = sorted((b.frequency.min(), b.frequency.max()) for b in frc.branches if b.order == 1)
-    gaps, hi = [], iv[0][1]
-    for lo_, hi_ in iv[1:]:
-        if lo_ > hi + 1e-9:
-            gaps.append((hi, lo_))
-        hi = max(hi, hi_)
-    print(f"harmonic branch covers {iv[0][0]:.3f}-{hi:.3f} Hz; gaps: "
-          + (", ".join(f"{a:.4f}-{b:.4f} Hz" for a, b in gaps) or "none"))
+    print(harmonic_coverage(frc))
     for bf in frc.bifurcations:
         if bf.kind != "grazing" and bf.order == 1:
             print(f"  {bf.kind:16s} order 1 at {bf.frequency:.10f} Hz (bracket {bf.tolerance:.1e})")
