@@ -32,8 +32,8 @@ import numpy as np
 
 from ._validate import choice, in_range, positive
 from .systems import Contact, System, _model_protocol
+from .vocabulary import BOUNDARY_CONDITIONS
 
-BOUNDARY_CONDITIONS = ("clamped-free", "clamped-clamped")
 MAX_MODES = 20
 _QUAD = np.polynomial.legendre.leggauss(240)
 

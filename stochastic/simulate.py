@@ -17,17 +17,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nlbeam._validate import nonnegative, positive
+from nlbeam.vocabulary import CHANNELS
 
 from .estimators import StreamingHistogram, StreamingMoments, WelchPSD, correlation_from_psd
 
-__all__ = ["simulate", "StochasticResult", "load", "ensemble", "EnsembleResult"]
+__all__ = ["simulate", "StochasticResult", "load", "ensemble", "EnsembleResult",
+           "default_transient"]
 
-CHANNELS = ("x", "v", "y", "yd", "delta", "force")
 OUTPUTS = ("psd", "pdf", "moments")
 
 
 def _parse_channel(name, model):
-    m = re.fullmatch(r"(x|v|y|yd|delta|force)(?:\[(\d+)\])?", str(name))
+    m = re.fullmatch(rf"({'|'.join(CHANNELS)})(?:\[(\d+)\])?", str(name))
     if m is None:
         raise ValueError(f"channels: unknown channel {name!r}; use one of {', '.join(CHANNELS)}, "
                          "optionally indexed like 'x[1]' or 'delta[0]'")
@@ -245,9 +246,7 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
         raise ValueError("channels: give at least one channel")
     parsed = {ch: _parse_channel(ch, model) for ch in channels}
     if transient is None:
-        wn = 2 * np.pi * np.min(model.system.natural_frequencies())
-        zeta = _min_damping_ratio(model)
-        transient = 10.0 / max(zeta * wn, 1e-3)
+        transient = default_transient(model)
     transient = nonnegative("transient", transient, unit="s")
     if isinstance(store_every, bool) or not isinstance(store_every, (int, np.integer)) or store_every < 1:
         raise ValueError(f"store_every: must be an integer >= 1, got {store_every!r}")
@@ -436,6 +435,14 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
         warnings.warn(text, RuntimeWarning, stacklevel=2)
     res.wall_time = time.perf_counter() - t_wall
     return res
+
+
+def default_transient(model):
+    """The transient ``simulate`` discards when given none (s): 10 decay times of the
+    slowest mode, 10 / (damping ratio * 2 pi f_n), at most 1e4 s."""
+    wn = 2 * np.pi * np.min(model.system.natural_frequencies())
+    zeta = _min_damping_ratio(model)
+    return 10.0 / max(zeta * wn, 1e-3)
 
 
 def _min_damping_ratio(model):

@@ -114,7 +114,8 @@ def _simulate(args):
             log(f"nlbeam simulate: {done:.4g} / {total:.4g} s simulated")
 
     res = stochastic.simulate(model, noise, args.duration, args.transient,
-                              channels=tuple(args.channels), psd_resolution=args.psd_resolution,
+                              channels=tuple(args.channels), method=args.method,
+                              psd_resolution=args.psd_resolution,
                               progress=None if args.quiet else progress)
     res.save(args.out)
     log(f"nlbeam simulate: {res.n_impacts} impacts in {res.wall_time:.1f} s -> {args.out}")
@@ -187,7 +188,8 @@ def bundled_scenes():
     folder = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(here))), "figures")
     if not os.path.isdir(folder):
         raise RuntimeError(f"figures: no bundled scenes at {folder} (run from a source checkout)")
-    return folder, sorted(os.path.join(folder, f) for f in os.listdir(folder) if f.endswith(".toml"))
+    return folder, sorted(os.path.join(folder, f) for f in os.listdir(folder)
+                          if f.endswith(".toml"))
 
 
 def _figures(args):
@@ -209,15 +211,32 @@ def _figures(args):
     return 0
 
 
+def _shown(v):
+    """A default as the command line spells it: lists as space-separated values."""
+    if isinstance(v, (list, tuple)):
+        return " ".join(_shown(x) for x in v)
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
 def _parser():
+    # the defaults shared with the scene files (nlbeam.app.defaults: the analyses' own, read
+    # from their signatures, and the paper's study); importing them loads the analyses
+    from nlbeam.vocabulary import CHANNELS, METHODS
+
+    from .defaults import (CHANNEL, MIN_PROMINENCE, MODEL, PERIODIC, SIMULATE_CHANNELS,
+                           STOCHASTIC)
+
+    per, sto = PERIODIC, STOCHASTIC
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--quiet", action="store_true", default=argparse.SUPPRESS,
                         help="no progress and no results (for scripts); warnings and "
                         "errors still go to stderr, one line each")
     parser = argparse.ArgumentParser(
         prog="nlbeam", description="Periodic and stochastic dynamics of a beam with an elastic "
-        "stop (the paper model: m = 37.75e-3 kg, k = 736.3 N/m, b = 0.16 kg/s, K_hertz = "
-        "2.1e8 N/m^1.5, e = 0.5). " + _UNITS, epilog="Exit status 0 on success, 2 on error.")
+        f"stop (the paper model: m = {MODEL['m']:g} kg, k = {MODEL['k']:g} N/m, b = "
+        f"{MODEL['b']:g} kg/s, K_hertz = {MODEL['K_hertz']:g} N/m^1.5, e = {MODEL['e']:g}, "
+        f"{MODEL['contact']} contact). " + _UNITS,
+        epilog="Exit status 0 on success, 2 on error.")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress and no results; warnings and errors still go to stderr")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -239,20 +258,24 @@ def _parser():
     p.set_defaults(func=_demo)
 
     def model_opts(p):
-        p.add_argument("--e", type=float, default=None, help="coefficient of restitution (-), default 0.5")
+        p.add_argument("--e", type=float, default=None,
+                       help=f"coefficient of restitution (-), default {MODEL['e']:g}")
         p.add_argument("--K-hertz", dest="K_hertz", type=float, default=None,
-                       help="Hertz contact stiffness (N/m^1.5), default 2.1e8")
+                       help=f"Hertz contact stiffness (N/m^1.5), default {MODEL['K_hertz']:g}")
 
     p = sub.add_parser("frc", parents=[common], help="periodic frequency-response diagram "
                        "(|x|max vs excitation frequency, orders 1..n) to HDF5",
                        description="Continuation of periodic solutions under y = A cos(2 pi f t): "
                        "branches of period n/f, stability, folds and period doublings. " + _UNITS)
-    p.add_argument("--amplitude", type=float, default=1e-4, help="base amplitude A (m), default 1e-4")
-    p.add_argument("--f-range", type=float, nargs=2, default=[5.0, 150.0], metavar=("LO", "HI"),
-                   help="excitation frequency range (Hz), default 5 150")
-    p.add_argument("--orders", type=int, nargs="+", default=[1, 2, 3],
-                   help="orders n (period n/f), default 1 2 3")
-    p.add_argument("--n-grid", type=int, default=30, help="brute-force start frequencies, default 30")
+    p.add_argument("--amplitude", type=float, default=per["amplitude"],
+                   help=f"base amplitude A (m), default {_shown(per['amplitude'])}")
+    p.add_argument("--f-range", type=float, nargs=2, default=list(per["f_range"]),
+                   metavar=("LO", "HI"),
+                   help=f"excitation frequency range (Hz), default {_shown(per['f_range'])}")
+    p.add_argument("--orders", type=int, nargs="+", default=list(per["orders"]),
+                   help=f"orders n (period n/f), default {_shown(per['orders'])}")
+    p.add_argument("--n-grid", type=int, default=per["n_grid"],
+                   help=f"brute-force start frequencies, default {per['n_grid']}")
     model_opts(p)
     p.add_argument("--out", default="frc.h5", help="HDF5 result file, default frc.h5")
     p.add_argument("--plot", default=None, help="also write the diagram (PNG/PDF/SVG)")
@@ -262,17 +285,31 @@ def _parser():
                        "Gaussian base excitation (PSD, PDF, moments) to HDF5",
                        description="Long-record simulation under band-limited Gaussian base "
                        "excitation with a flat (optionally low-passed) PSD. " + _UNITS)
-    p.add_argument("--band", type=float, nargs=2, default=[0.0, 200.0], metavar=("LO", "HI"),
-                   help="excitation band (Hz), default 0 200")
-    p.add_argument("--rms", type=float, default=1e-4, help="excitation rms (m), default 1e-4")
-    p.add_argument("--lowpass", type=float, default=None,
-                   help="first-order low-pass corner (Hz) shaping the band (actuator), default none")
-    p.add_argument("--seed", type=int, default=1, help="random seed (integer >= 0), default 1")
-    p.add_argument("--duration", type=float, default=60.0, help="record kept (s), default 60")
-    p.add_argument("--transient", type=float, default=2.0, help="discarded start (s), default 2")
-    p.add_argument("--psd-resolution", type=float, default=0.25, help="Welch bin (Hz), default 0.25")
-    p.add_argument("--channels", nargs="+", default=["delta", "x", "y"],
-                   help="x, v, y, yd, delta (penetration x - y, m), force (N); default delta x y")
+    p.add_argument("--band", type=float, nargs=2, default=list(sto["band"]),
+                   metavar=("LO", "HI"),
+                   help=f"excitation band (Hz), default {_shown(sto['band'])}")
+    p.add_argument("--rms", type=float, default=sto["rms"],
+                   help=f"excitation rms (m), default {_shown(sto['rms'])}")
+    p.add_argument("--lowpass", type=float, default=sto["lowpass"],
+                   help="first-order low-pass corner (Hz) shaping the band (actuator), default "
+                   + ("none" if sto["lowpass"] is None else _shown(sto["lowpass"])))
+    p.add_argument("--seed", type=int, default=sto["seed"],
+                   help=f"random seed (integer >= 0), default {sto['seed']}")
+    p.add_argument("--duration", type=float, default=sto["duration"],
+                   help=f"record kept (s), default {_shown(sto['duration'])}")
+    p.add_argument("--transient", type=float, default=sto["transient"],
+                   help="discarded start (s), default " + (
+                       "10 decay times of the slowest mode (stochastic.simulate)"
+                       if sto["transient"] is None else _shown(sto["transient"])))
+    p.add_argument("--psd-resolution", type=float, default=sto["psd_resolution"],
+                   help="Welch bin (Hz), default " + (
+                       "max(0.05, 16 / duration) (stochastic.simulate)"
+                       if sto["psd_resolution"] is None else _shown(sto["psd_resolution"])))
+    p.add_argument("--method", choices=METHODS, default=sto["method"],
+                   help=f"integrator, default {sto['method']}")
+    p.add_argument("--channels", nargs="+", default=list(SIMULATE_CHANNELS),
+                   help=f"any of {', '.join(CHANNELS)} (delta: penetration x - y, m; force: N); "
+                   f"default {_shown(SIMULATE_CHANNELS)}")
     model_opts(p)
     p.add_argument("--out", default="stochastic.h5", help="HDF5 result file, default stochastic.h5")
     p.add_argument("--plot", default=None, help="also write the PSDs (PNG/PDF/SVG)")
@@ -284,9 +321,10 @@ def _parser():
                        "PSD peaks and print which resonance explains each. " + _UNITS)
     p.add_argument("stochastic", help="HDF5 file of nlbeam simulate")
     p.add_argument("diagram", help="HDF5 file of nlbeam frc")
-    p.add_argument("--channel", default="delta", help="PSD channel, default delta")
-    p.add_argument("--min-prominence", type=float, default=0.3,
-                   help="least peak height over the running-median background (decades), default 0.3")
+    p.add_argument("--channel", default=CHANNEL, help=f"PSD channel, default {CHANNEL}")
+    p.add_argument("--min-prominence", type=float, default=MIN_PROMINENCE,
+                   help="least peak height over the running-median background (decades), "
+                   f"default {_shown(MIN_PROMINENCE)}")
     p.add_argument("--f-max", type=float, default=None,
                    help="upper frequency (Hz) of the peaks considered and of the plot, default all")
     p.add_argument("--plot", default=None, help="write the comparison figure (PNG/PDF/SVG)")
@@ -312,7 +350,8 @@ def _parser():
 
     p = sub.add_parser("figures", parents=[common], help="run the bundled scenes in figures/ "
                        "(the paper's figures; minutes on first run, seconds when cached)",
-                       description="Run every scene in the repository's figures/ folder. " + _UNITS)
+                       description="Run every scene in the repository's figures/ folder. "
+                       + _UNITS)
     p.add_argument("--out", default=None, help="output folder, default the figures/ folder")
     p.add_argument("--only", nargs="+", default=None, help="scene names (file stems) to run")
     run_opts(p)

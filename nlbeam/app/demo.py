@@ -23,6 +23,7 @@ seed = 1
 duration = 10.0             # s kept
 transient = 1.0             # s discarded
 psd_resolution = 0.5        # Hz
+method = "rk4"              # fixed step, as before; stochastic.simulate's default: adaptive
 
 [sweep]
 parameter = "band"

@@ -9,7 +9,8 @@ import os
 
 import numpy as np
 
-from ..scenes.schema import build_noise, default_f_max
+from .. import defaults
+from ..scenes.schema import build_noise, default_f_max, history_channels, history_window
 from .compare import plot_comparison
 from .files import files_backend, save_figure
 from .frequency_response import plot_frequency_response
@@ -33,7 +34,7 @@ def scene_figure(scene_title, d, variants, out_dir):
     import matplotlib.pyplot as plt
 
     kind = d["kind"]
-    ch = d.get("channel", "delta")
+    ch = d.get("channel", defaults.CHANNEL)
     target = os.path.join(out_dir, d["file"])
     multi = len(variants) > 1
     title = d.get("title", scene_title)
@@ -53,12 +54,12 @@ def scene_figure(scene_title, d, variants, out_dir):
                                       stability=d.get("stability", True))
                 fig.axes[0].set_title(t)
             else:
-                chans = d.get("channels", ["y", "x"])
+                chans = history_channels(d)
                 fig, axs = plt.subplots(len(chans), 1, sharex=True,
                                         figsize=(8, 2.2 * len(chans) + 1), squeeze=False)
                 h = sto.history
-                w = d.get("window", [0.0, min(0.5, s["duration"])])
-                tt = h["t"] - s["transient"]
+                w = history_window(d, s["duration"])
+                tt = h["t"] - (sto.transient if s["transient"] is None else s["transient"])
                 sel = (tt >= w[0]) & (tt <= w[1])
                 for ax, c in zip(axs[:, 0], chans):
                     sc = 1.0 if c == "force" else 1e3

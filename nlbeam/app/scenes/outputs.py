@@ -7,6 +7,7 @@ import csv
 import io
 import os
 
+from .. import defaults
 from ..compare import map_peaks
 from ..files import write_text_atomic
 from ..plots.scene import scene_figure
@@ -68,7 +69,7 @@ def write_table(d, variants, out_dir):
     """Write the CSV table of one [[table]] entry ``d`` (moments, peaks or bifurcations) over
     the variants it distinguishes. Returns its path."""
     kind = d["kind"]
-    ch = d.get("channel", "delta")
+    ch = d.get("channel", defaults.CHANNEL)
     rows = []
     for label, m, p, s, per, sto, _ in distinct(kind, variants):
         if kind == "moments":

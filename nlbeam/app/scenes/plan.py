@@ -14,13 +14,14 @@ of the analysis' inputs (model, its section with defaults filled in, the channel
 """
 from __future__ import annotations
 
-import inspect
 import os
 from dataclasses import dataclass
 
 import nlbeam
 
+from .. import defaults
 from ..files import content_key
+from .schema import history_channels, history_window
 
 __all__ = ["CACHE_DIR", "Job", "plan", "format_plan"]
 
@@ -46,8 +47,7 @@ def _model_inputs(spec):
     a scene that writes a default out and one that leaves it share a cache entry."""
     if spec.get("name", "BeamImpact") != "BeamImpact":
         return spec
-    full = {k: p.default for k, p in inspect.signature(nlbeam.BeamImpact).parameters.items()
-            if p.default is not inspect.Parameter.empty and p.default is not None}
+    full = {k: v for k, v in defaults.MODEL.items() if v is not None}
     full.update((k, v) for k, v in spec.items() if k != "name")
     return full
 
@@ -65,7 +65,7 @@ def needs(scene):
 
     for d in scene.figures + scene.tables:
         k = d["kind"]
-        ch = d.get("channel", "delta")
+        ch = d.get("channel", defaults.CHANNEL)
         if k in ("frc", "bifurcations", "compare", "peaks"):
             need_stab = need_stab or d.get("stability", True)
         if k in ("frc", "bifurcations"):
@@ -82,9 +82,9 @@ def needs(scene):
             need_p = True
             want(ch, "psd")
         elif k == "history":
-            w = d.get("window", [0.0, min(0.5, scene.stochastic["duration"])])
+            w = history_window(d, scene.stochastic["duration"])
             hist = list(w) if hist is None else [min(hist[0], w[0]), max(hist[1], w[1])]
-            for c in d.get("channels", ["y", "x"]):
+            for c in history_channels(d):
                 if c not in hist_ch:
                     hist_ch.append(c)
     return need_p, need_stab, chans, hist, hist_ch

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import continuation
 import stochastic
+from stochastic.simulate import default_transient
 
 from ..files import canonical_json, write_text_atomic
 from ..sweeps import run_jobs
@@ -35,8 +36,11 @@ def compute(job_inputs):
             n_grid=p["n_grid"], segments=p["segments"], dt_scale=p["dt_scale"], **kw)
     s = job_inputs["stochastic"]
     hist = job_inputs["history"]
-    keep = None if hist is None else (s["transient"] + hist[0], s["transient"] + hist[1])
-    return stochastic.simulate(model, build_noise(s), s["duration"], s["transient"],
+    transient = s["transient"]
+    if transient is None:  # the history window is counted from its end
+        transient = default_transient(model)
+    keep = None if hist is None else (transient + hist[0], transient + hist[1])
+    return stochastic.simulate(model, build_noise(s), s["duration"], transient,
                                outputs=tuple(job_inputs["outputs"]),
                                channels=tuple(job_inputs["channels"]), method=s["method"],
                                psd_resolution=s["psd_resolution"], keep_history=keep,

@@ -48,17 +48,17 @@ from dataclasses import dataclass
 
 import nlbeam
 import stochastic
+from nlbeam.vocabulary import BOUNDARY_CONDITIONS, CHANNELS, CONTACT_LAWS, METHODS
 
+from .. import defaults
 from ..files import canonical_json
 from ..sweeps import PARAMETERS
 
-__all__ = ["SceneError", "Scene", "load_scene", "build_model", "build_noise", "default_f_max"]
+__all__ = ["SceneError", "Scene", "load_scene", "build_model", "build_noise", "default_f_max",
+           "history_window", "history_channels", "FIGURE_KINDS", "TABLE_KINDS"]
 
-CHANNELS = ("x", "v", "y", "yd", "delta", "force")
 FIGURE_KINDS = ("frc", "excitation_psd", "pdf", "history", "psd", "compare")
 TABLE_KINDS = ("moments", "peaks", "bifurcations")
-CONTACTS = ("hertz", "lankarani-nikravesh", "hunt-crossley")
-METHODS = ("rk2", "rk4", "adaptive")
 
 
 class SceneError(ValueError):
@@ -148,9 +148,9 @@ def _file(exts):
 MODEL_KEYS = {"name": _choice(("BeamImpact", "ModalBeam")), "m": _real(0, lo_open=True, unit="kg"),
               "k": _real(0, unit="N/m"), "b": _real(0, unit="kg/s"),
               "K_hertz": _real(0, unit="N/m^1.5"), "e": _real(0, 1, lo_open=True),
-              "contact": _choice(CONTACTS), "mu": _real(0, unit="N s/m^2.5"), "clamp": _bool,
+              "contact": _choice(CONTACT_LAWS), "mu": _real(0, unit="N s/m^2.5"), "clamp": _bool,
               # name = "ModalBeam": ModalBeam.paper(...) (docs/modal_beam.md), m, k, b not taken
-              "n_modes": _int(1, 20), "bc": _choice(("clamped-free", "clamped-clamped")),
+              "n_modes": _int(1, 20), "bc": _choice(BOUNDARY_CONDITIONS),
               "stop_ratio": _real(0, 1, lo_open=True), "zeta": _real(0), "gap": _real(unit="m")}
 MODAL_KEYS = ("n_modes", "bc", "stop_ratio", "zeta", "gap")
 PERIODIC_KEYS = {"amplitude": _real(0, lo_open=True, unit="m"),
@@ -178,11 +178,10 @@ SWEEP_KEYS = {"parameter": _choice(tuple(PARAMETERS)), "values": None,
 SECTIONS = {"model": MODEL_KEYS, "periodic": PERIODIC_KEYS, "stochastic": STOCHASTIC_KEYS,
             "sweep": SWEEP_KEYS}
 
-PERIODIC_DEFAULTS = {"amplitude": 1e-4, "f_range": [5.0, 150.0], "orders": [1, 2, 3],
-                     "n_grid": 30, "segments": 1, "dt_scale": 1.0}
-STOCHASTIC_DEFAULTS = {"band": [0.0, 200.0], "seed": 1, "duration": 60.0, "transient": 2.0,
-                       "psd_resolution": 0.25, "method": "rk4", "pdf_bins": 200,
-                       "lowpass": None}
+#: what a section leaves out (nlbeam.app.defaults: the analyses' own defaults and the paper's
+#: study); transient and psd_resolution None: stochastic.simulate derives them
+PERIODIC_DEFAULTS = defaults.PERIODIC
+STOCHASTIC_DEFAULTS = defaults.STOCHASTIC
 
 
 # -- locating keys in the text (tomllib gives no line numbers) -----------------------------
@@ -318,17 +317,17 @@ def load_scene(path) -> Scene:
         model.pop("name", None)
     periodic = stoch = None
     if "periodic" in doc:
-        periodic = dict(PERIODIC_DEFAULTS)
+        periodic = copy.deepcopy(PERIODIC_DEFAULTS)
         periodic.update(section("periodic", PERIODIC_KEYS, doc["periodic"], ("periodic",)))
     if "stochastic" in doc:
         s = section("stochastic", STOCHASTIC_KEYS, doc["stochastic"], ("stochastic",))
         if "rms" in s and "psd_level" in s:
             fail(("stochastic", "psd_level"), "give either rms (m) or psd_level (m^2/Hz), not both")
-        stoch = dict(STOCHASTIC_DEFAULTS)
-        if "psd_level" not in s:
-            stoch["rms"] = 1e-4
+        stoch = copy.deepcopy(STOCHASTIC_DEFAULTS)
+        if "psd_level" in s:
+            del stoch["rms"]
         stoch.update(s)
-        if stoch["psd_resolution"] * stoch["duration"] < 1.0:
+        if stoch["psd_resolution"] is not None and stoch["psd_resolution"] * stoch["duration"] < 1:
             fail(("stochastic", "psd_resolution"),
                  f"needs Welch segments of {1 / stoch['psd_resolution']:g} s, longer than "
                  f"duration {stoch['duration']:g} s", stoch["psd_resolution"])
@@ -362,7 +361,7 @@ def load_scene(path) -> Scene:
             if needs_s and stoch is None:
                 fail((name, i, "kind"), f"{d['kind']!r} needs a [stochastic] section")
             if d["kind"] == "history" and stoch is not None:
-                w = d.get("window", [0.0, min(0.5, stoch["duration"])])
+                w = history_window(d, stoch["duration"])
                 if w[1] > stoch["duration"]:
                     fail((name, i, "window"), f"must lie within the kept record [0, "
                          f"{stoch['duration']:g}] s", w)
@@ -433,3 +432,15 @@ def default_f_max(p, s):
     """Peaks and comparisons look up to the excitation band's or the diagram's upper end
     (whichever is higher), not to the Nyquist frequency of the record."""
     return max(float(s["band"][1]), float(p["f_range"][1]))
+
+
+def history_window(d, duration):
+    """The window [t0, t1] (s after the transient) of a history figure ``d``: its ``window``,
+    else the first defaults.HISTORY_SECONDS s of a record of ``duration`` s."""
+    return d.get("window", [0.0, min(defaults.HISTORY_SECONDS, duration)])
+
+
+def history_channels(d):
+    """The channels of a history figure ``d``: its ``channels``, else
+    defaults.HISTORY_CHANNELS."""
+    return d.get("channels", list(defaults.HISTORY_CHANNELS))
