@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import math
-import os
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -103,112 +102,19 @@ class FrequencyResponse:
 
     def save(self, path):
         """Write to HDF5 (atomically: a temporary file in the same folder, then os.replace;
-        the usual file mode under the umask)."""
-        import h5py
+        the usual file mode under the umask). The file format lives on the application floor
+        (nlbeam.app.files.frequency_response_hdf5), which imports h5py."""
+        from nlbeam.app.files.frequency_response_hdf5 import save_frequency_response
 
-        from nlbeam.io import atomic_path
-
-        with atomic_path(path, suffix=".h5") as tmp:  # removed (and re-raised) on failure
-            with h5py.File(tmp, "w") as h:
-                h.attrs["version"] = self.version
-                h.attrs["amplitude"] = self.amplitude
-                h.attrs["parameter"] = self.parameter
-                h.attrs["p_range"] = np.asarray(self.p_range, dtype=float)
-                h.attrs["wall_time"] = self.wall_time
-                h.attrs["n_points"] = self.n_points
-                for k, v in self.model_parameters.items():
-                    h.attrs[f"model.{k}"] = v
-                for k, v in self.settings.items():
-                    h.attrs[f"settings.{k}"] = "None" if v is None else v
-                g = h.create_group("branches")
-                for i, b in enumerate(self.branches):
-                    gb = g.create_group(f"{i:04d}")
-                    gb.attrs["order"] = b.order
-                    gb.attrs["parameter"] = b.parameter
-                    gb.attrs["origin"] = b.origin
-                    gb.attrs["ends"] = np.array([str(e) for e in b.ends], dtype="S64")
-                    for name in ("values", "frequency", "amplitude", "xmax", "stable",
-                                 "multipliers", "state0", "states", "boundaries"):
-                        if getattr(b, name) is not None:  # stable, multipliers: None without
-                            gb.create_dataset(name, data=np.asarray(getattr(b, name)))
-                gf = h.create_group("bifurcations")
-                bif = self.bifurcations
-                gf.create_dataset("kind", data=np.array([b.kind for b in bif], dtype="S16"))
-                for name in ("frequency", "value", "xmax", "order", "branch", "tolerance",
-                             "integrator_error"):
-                    gf.create_dataset(name, data=np.array([getattr(b, name) for b in bif],
-                                                          dtype=float))
-                n2 = max([len(b.multipliers) for b in bif if b.multipliers is not None],
-                         default=0)
-                mu = np.full((len(bif), n2), np.nan, dtype=complex)  # NaN: not computed
-                for i, b in enumerate(bif):
-                    if b.multipliers is not None:
-                        mu[i, :len(b.multipliers)] = b.multipliers
-                gf.create_dataset("multipliers", data=mu)
-                n2 = max([len(b.state0) for b in bif if b.state0 is not None], default=0)
-                st = np.full((len(bif), n2), np.nan)
-                for i, b in enumerate(bif):
-                    if b.state0 is not None:
-                        st[i] = b.state0
-                gf.create_dataset("state0", data=st)
-                n3 = max([b.disc0.size for b in bif if b.disc0 is not None], default=0)
-                dc = np.full((len(bif), n3), np.nan)  # NaN: out of contact at t = 0
-                for i, b in enumerate(bif):
-                    if b.disc0 is not None:
-                        dc[i] = np.ravel(b.disc0)
-                gf.create_dataset("disc0", data=dc)
-                gs = h.create_group("superharmonics")
-                for name in ("frequency", "xmax", "harmonic", "branch", "ratio", "tolerance"):
-                    gs.create_dataset(name, data=np.array([getattr(s, name) for s in
-                                                           self.superharmonics], dtype=float))
+        save_frequency_response(self, path)
 
 
 def load(path):
-    """Read a FrequencyResponse written by ``FrequencyResponse.save``."""
-    import h5py
+    """Read a FrequencyResponse written by ``FrequencyResponse.save`` (the format:
+    nlbeam.app.files.frequency_response_hdf5)."""
+    from nlbeam.app.files.frequency_response_hdf5 import load_frequency_response
 
-    def s(v):
-        return v.decode() if isinstance(v, bytes) else (v.item() if hasattr(v, "item") else v)
-
-    with h5py.File(path, "r") as h:
-        a = h.attrs
-        model = {k[6:]: s(a[k]) for k in a if k.startswith("model.")}
-        settings = {k[9:]: s(a[k]) for k in a if k.startswith("settings.")}
-        frc = FrequencyResponse(model_parameters=model, amplitude=float(a["amplitude"]),
-                                parameter=s(a["parameter"]), p_range=tuple(a["p_range"]),
-                                settings=settings, wall_time=float(a["wall_time"]),
-                                n_points=int(a["n_points"]), version=s(a["version"]))
-        for key in sorted(h["branches"]):
-            gb = h["branches"][key]
-            frc.branches.append(Branch(
-                order=int(gb.attrs["order"]), parameter=s(gb.attrs["parameter"]),
-                origin=s(gb.attrs["origin"]),
-                ends=tuple(e.decode() for e in gb.attrs["ends"]) if "ends" in gb.attrs
-                else ("", ""),
-                **{n: gb[n][()] if n in gb else None
-                   for n in ("values", "frequency", "amplitude", "xmax", "stable",
-                             "multipliers", "state0", "states", "boundaries")}))
-        gf = h["bifurcations"]
-        for i in range(len(gf["kind"])):
-            frc.bifurcations.append(Bifurcation(
-                kind=gf["kind"][i].decode(), frequency=float(gf["frequency"][i]),
-                value=float(gf["value"][i]), xmax=float(gf["xmax"][i]),
-                order=int(gf["order"][i]), branch=int(gf["branch"][i]),
-                tolerance=float(gf["tolerance"][i]),
-                multipliers=None if np.all(np.isnan(gf["multipliers"][i]))
-                and gf["multipliers"].shape[1] else gf["multipliers"][i],
-                integrator_error=float(gf["integrator_error"][i]) if "integrator_error" in gf
-                else float("nan"),
-                state0=gf["state0"][i],
-                disc0=gf["disc0"][i].reshape(-1, 2) if "disc0" in gf and gf["disc0"].shape[1]
-                and not np.all(np.isnan(gf["disc0"][i])) else None))
-        gs = h["superharmonics"]
-        for i in range(len(gs["frequency"])):
-            frc.superharmonics.append(Superharmonic(
-                frequency=float(gs["frequency"][i]), xmax=float(gs["xmax"][i]),
-                harmonic=int(gs["harmonic"][i]), branch=int(gs["branch"][i]),
-                **{n: float(gs[n][i]) for n in ("ratio", "tolerance") if n in gs}))
-    return frc
+    return load_frequency_response(path)
 
 
 # --- building branches ---------------------------------------------------------------------------

@@ -54,14 +54,16 @@ def psd_map(scene, plt):
     import continuation
     import stochastic
 
-    from nlbeam.compare import map_peaks, plot_comparison
-    from nlbeam.scenes import _noise, plan
+    from nlbeam.app.compare import map_peaks
+    from nlbeam.app.plots.compare import plot_comparison
+    from nlbeam.app.scenes import plan
+    from nlbeam.app.scenes.schema import build_noise
 
     jobs = {j.kind: j for j in plan(scene, HERE)}
     frc = continuation.load(jobs["periodic"].path)
     res = stochastic.load(jobs["stochastic"].path)
     psd = res.psd("delta")
-    noise = _noise(scene.stochastic)
+    noise = build_noise(scene.stochastic)
     kw = dict(background_hz=40.0, f_range=(5.0, 200.0))
     matches = map_peaks(psd, frc, noise, **kw)
     fig = plot_comparison(psd, frc, matches, excitation=noise, f_max=200.0, **kw)
@@ -82,7 +84,7 @@ def main(argv=None):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from continuation.plot import plot_frequency_response
+    from nlbeam.app.plots.frequency_response import plot_frequency_response
 
     frcs = {n: diagram(n) for n in args.modes}
     fig, axs = plt.subplots(1, len(frcs), figsize=(5 * len(frcs), 4.5), sharey=True, squeeze=False)
@@ -101,7 +103,8 @@ def main(argv=None):
         w.writerows(rows)
     print(f"wrote figures/modal_beam_frc.png, figures/table_modal_bifurcations.csv ({len(rows)} rows)")
     if not args.skip_scene:
-        from nlbeam.scenes import _store, load_scene, plan, run_scene
+        from nlbeam.app.scenes import load_scene, plan, run_scene
+        from nlbeam.app.scenes.run import store_result
 
         scene = load_scene(os.path.join(HERE, "modal_beam.toml"))
         for job in plan(scene, HERE):  # the scene's diagram is the N = 4 one above: reuse it
@@ -111,7 +114,7 @@ def main(argv=None):
                     and p.get("n_grid") == N_GRID and p.get("segments") == 1
                     and p.get("dt_scale") == 1.0 and p.get("stability", True))
             if job.kind == "periodic" and not job.cached and same and 4 in frcs:
-                _store(job, frcs[4])
+                store_result(job, frcs[4])
         rep = run_scene(scene, HERE)
         print(f"scene: {rep.computed} analyses computed, wrote {', '.join(rep.files)}")
         psd_map(scene, plt)

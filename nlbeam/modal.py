@@ -29,12 +29,11 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ._validate import choice, in_range, positive
 from .systems import Contact, System, _model_protocol
+from .vocabulary import BOUNDARY_CONDITIONS
 
-BOUNDARY_CONDITIONS = ("clamped-free", "clamped-clamped")
 MAX_MODES = 20
 _QUAD = np.polynomial.legendre.leggauss(240)
 
@@ -42,6 +41,8 @@ _QUAD = np.polynomial.legendre.leggauss(240)
 def beta_roots(bc, n_modes):
     """Dimensionless roots beta_i L (i = 1..n) of the characteristic equation:
     clamped-free cos(b) cosh(b) = -1, clamped-clamped cos(b) cosh(b) = 1."""
+    from scipy.optimize import brentq  # not at module level: it costs `import nlbeam` ~0.5 s
+
     choice("bc", bc, BOUNDARY_CONDITIONS)
     sgn = 1.0 if bc == "clamped-free" else -1.0
     shift = 0.5 if bc == "clamped-free" else 1.5
@@ -271,6 +272,8 @@ class ModalBeam:
         unit = ModalBeam(length=1.0, width=1.0, thickness=1.0, E=1.0, density=1.0,
                          stop_position=0.5, n_modes=1, bc=bc, K_hertz=0.0)
         if stop_ratio is None:
+            from scipy.optimize import brentq  # not at module level (see beta_roots)
+
             gam1 = float(unit.participation_factors[0])
 
             def s1(r):

@@ -18,8 +18,8 @@ import numpy as np
 
 from . import _kernels as _k
 from ._validate import choice, finite, in_range, nonnegative, positive
+from .vocabulary import CONTACT_LAWS
 
-CONTACT_LAWS = ("hertz", "lankarani-nikravesh", "hunt-crossley")
 _LAW_CODE = {"hertz": _k.HERTZ, "lankarani-nikravesh": _k.LANKARANI, "hunt-crossley": _k.HUNT_CROSSLEY}
 
 
@@ -98,8 +98,8 @@ class Contact:
     clamp: bool = True
 
     def __post_init__(self):
-        choice("contact", self.law, CONTACT_LAWS)
-        nonnegative("K_hertz", self.K, unit="N/m^1.5")
+        choice("law", self.law, CONTACT_LAWS)
+        nonnegative("K", self.K, unit="N/m^1.5")
         finite("gap", self.gap)
         choice("side", self.side, (1, -1))
         if self.law == "lankarani-nikravesh":

@@ -1,8 +1,8 @@
 """Stochastic dynamics: Gaussian excitations synthesized block by block, streaming
 estimators (Welch PSD, histogram PDF, moments) and the simulation loop.
 
-Importing this package loads neither matplotlib nor h5py; figures are in `stochastic.plot`
-(imported on demand).
+Importing this package loads neither matplotlib nor h5py: the figures (`stochastic.plot`) and
+the HDF5 files (`StochasticResult.save`, `load`) live on the application floor, nlbeam.app.
 """
 from .estimators import (StreamingHistogram, StreamingMoments, WelchPSD, correlation_from_psd,
                          welch_dof)

@@ -8,7 +8,6 @@ feed the streaming estimators. Memory is one chunk, whatever the duration.
 from __future__ import annotations
 
 import math
-import os
 import re
 import sys
 import time
@@ -18,18 +17,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nlbeam._validate import nonnegative, positive
+from nlbeam.vocabulary import CHANNELS
 
 from .estimators import StreamingHistogram, StreamingMoments, WelchPSD, correlation_from_psd
 
-__all__ = ["simulate", "StochasticResult", "load", "ensemble", "EnsembleResult"]
+__all__ = ["simulate", "StochasticResult", "load", "ensemble", "EnsembleResult",
+           "default_transient"]
 
-CHANNELS = ("x", "v", "y", "yd", "delta", "force")
 OUTPUTS = ("psd", "pdf", "moments")
-_FORMAT = "nlbeam.stochastic.result/1"
 
 
 def _parse_channel(name, model):
-    m = re.fullmatch(r"(x|v|y|yd|delta|force)(?:\[(\d+)\])?", str(name))
+    m = re.fullmatch(rf"({'|'.join(CHANNELS)})(?:\[(\d+)\])?", str(name))
     if m is None:
         raise ValueError(f"channels: unknown channel {name!r}; use one of {', '.join(CHANNELS)}, "
                          "optionally indexed like 'x[1]' or 'delta[0]'")
@@ -79,6 +78,8 @@ def _is_plain_table(excitation):
 
 
 def _attr(v):
+    """``v`` as a plain HDF5 attribute value (None -> "none", integers beyond int64 -> str), so
+    a result compares equal to itself saved and loaded (the seed)."""
     if v is None:
         return "none"
     if isinstance(v, (bool, np.bool_)):
@@ -169,84 +170,19 @@ class StochasticResult:
     # -- files ------------------------------------------------------------------------
     def save(self, path):
         """Write to HDF5 (temporary file in the same directory, then renamed; the usual
-        file mode under the umask)."""
-        import h5py
+        file mode under the umask). Returns ``path``. The file format lives on the
+        application floor (nlbeam.app.files.stochastic_hdf5), which imports h5py."""
+        from nlbeam.app.files.stochastic_hdf5 import save_stochastic_result
 
-        from nlbeam.io import atomic_path
-
-        with atomic_path(path, suffix=".h5") as tmp:  # temporary name, then renamed
-            with h5py.File(tmp, "w") as f:
-                meta = {"format": _FORMAT, "channels": ",".join(self.channels),
-                        "outputs": ",".join(self.outputs), "fs": self.fs, "dt": self.dt,
-                        "t_start": self.t_start, "transient": self.transient,
-                        "duration": self.duration, "method": self.method, "seed": self.seed,
-                        "nlbeam_version": self.nlbeam_version, "n_impacts": self.n_impacts,
-                        "n_steps": self.n_steps, "n_chunks": self.n_chunks,
-                        "n_samples": self.n_samples, "wall_time": self.wall_time,
-                        "min_steps_per_contact": self.min_steps_per_contact,
-                        "success": self.success, "message": self.message}
-                for k, v in meta.items():
-                    f.attrs[k] = _attr(v)
-                g = f.create_group("model")
-                for k, v in self.model_parameters.items():
-                    g.attrs[k] = _attr(v)
-                g = f.create_group("excitation")
-                for k, v in self.excitation_description.items():
-                    g.attrs[k] = _attr(v)
-                for store, name in ((self.psd_data, "psd"), (self.pdf_data, "pdf"),
-                                    (self.moment_data, "moments")):
-                    for ch, data in store.items():
-                        g = f.require_group(f"channels/{ch}/{name}")
-                        for k, v in data.items():
-                            if isinstance(v, np.ndarray):
-                                g.create_dataset(k, data=v)
-                            else:
-                                g.attrs[k] = _attr(v)
-                if self.history is not None:
-                    g = f.create_group("history")
-                    for k, v in self.history.items():
-                        g.create_dataset(k, data=v)
-        return path
+        return save_stochastic_result(self, path)
 
 
 def load(path) -> StochasticResult:
-    """Read a :class:`StochasticResult` written by ``save``."""
-    import h5py
+    """Read a :class:`StochasticResult` written by ``save`` (the format:
+    nlbeam.app.files.stochastic_hdf5)."""
+    from nlbeam.app.files.stochastic_hdf5 import load_stochastic_result
 
-    def val(v):
-        if isinstance(v, bytes):
-            v = v.decode()
-        if isinstance(v, np.generic):
-            v = v.item()
-        return v
-
-    with h5py.File(os.fspath(path), "r") as f:
-        a = {k: val(v) for k, v in f.attrs.items()}
-        if a.get("format") != _FORMAT:
-            raise ValueError(f"path: {path!r} is not a stochastic result file (format {a.get('format')!r})")
-        stores = {"psd": {}, "pdf": {}, "moments": {}}
-        chans = tuple(c for c in a["channels"].split(",") if c)
-        for ch in chans:
-            for name in stores:
-                key = f"channels/{ch}/{name}"
-                if key in f:
-                    g = f[key]
-                    d = {k: val(v) for k, v in g.attrs.items()}
-                    d.update({k: g[k][()] for k in g.keys()})
-                    stores[name][ch] = d
-        hist = {k: f["history"][k][()] for k in f["history"].keys()} if "history" in f else None
-        res = StochasticResult(
-            channels=chans, outputs=tuple(o for o in a["outputs"].split(",") if o), fs=a["fs"],
-            dt=a["dt"], t_start=a["t_start"], transient=a["transient"], duration=a["duration"],
-            method=a["method"], seed=a["seed"],
-            model_parameters={k: val(v) for k, v in f["model"].attrs.items()},
-            excitation_description={k: val(v) for k, v in f["excitation"].attrs.items()},
-            nlbeam_version=a["nlbeam_version"], psd_data=stores["psd"], pdf_data=stores["pdf"],
-            moment_data=stores["moments"], history=hist, n_impacts=a["n_impacts"],
-            n_steps=a["n_steps"], n_chunks=a["n_chunks"], n_samples=a["n_samples"],
-            min_steps_per_contact=a["min_steps_per_contact"], wall_time=a["wall_time"],
-            success=bool(a["success"]), message=a["message"])
-    return res
+    return load_stochastic_result(path)
 
 
 def _default_resolution(duration):
@@ -310,9 +246,7 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
         raise ValueError("channels: give at least one channel")
     parsed = {ch: _parse_channel(ch, model) for ch in channels}
     if transient is None:
-        wn = 2 * np.pi * np.min(model.system.natural_frequencies())
-        zeta = _min_damping_ratio(model)
-        transient = 10.0 / max(zeta * wn, 1e-3)
+        transient = default_transient(model)
     transient = nonnegative("transient", transient, unit="s")
     if isinstance(store_every, bool) or not isinstance(store_every, (int, np.integer)) or store_every < 1:
         raise ValueError(f"store_every: must be an integer >= 1, got {store_every!r}")
@@ -501,6 +435,14 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
         warnings.warn(text, RuntimeWarning, stacklevel=2)
     res.wall_time = time.perf_counter() - t_wall
     return res
+
+
+def default_transient(model):
+    """The transient ``simulate`` discards when given none (s): 10 decay times of the
+    slowest mode, 10 / (damping ratio * 2 pi f_n), at most 1e4 s."""
+    wn = 2 * np.pi * np.min(model.system.natural_frequencies())
+    zeta = _min_damping_ratio(model)
+    return 10.0 / max(zeta * wn, 1e-3)
 
 
 def _min_damping_ratio(model):

@@ -186,10 +186,11 @@ def test_bad_input_names_the_parameter(kw, name):
 
 
 def test_scene_names_the_modal_beam(tmp_path):
-    from nlbeam.scenes import SceneError, _model, load_scene, run_scene
+    from nlbeam.app.scenes.schema import build_model
+    from nlbeam.scenes import SceneError, load_scene, run_scene
 
     sc = load_scene(os.path.join(os.path.dirname(__file__), "..", "..", "figures", "modal_beam.toml"))
-    m = _model(sc.model)
+    m = build_model(sc.model)
     assert isinstance(m, ModalBeam) and m.n_modes == 4
     p = tmp_path / "s.toml"
     p.write_text('[model]\nname = "ModalBeam"\nn_modes = 2\n[stochastic]\nduration = 1.0\n'

@@ -50,6 +50,17 @@ def test_bad_model_parameters_name_the_parameter(kwargs, name):
         nlbeam.BeamImpact.paper(**kwargs)
 
 
+@pytest.mark.parametrize("kwargs, name", [
+    ({"law": "kelvin"}, "law"), ({"K": -1.0}, "K"), ({"gap": float("nan")}, "gap"),
+    ({"law": "hunt-crossley"}, "mu"), ({"law": "lankarani-nikravesh"}, "e"),
+])
+def test_bad_contact_parameters_name_the_parameter(kwargs, name):
+    kw = dict(dof=0, law="hertz", K=1e8)
+    kw.update(kwargs)
+    with pytest.raises(ValueError, match=rf"^{name}:"):
+        nlbeam.Contact(**kw)
+
+
 def test_stop_removed_is_valid():
     m = nlbeam.BeamImpact.paper(K_hertz=0.0)
     assert not m.has_events()

@@ -46,7 +46,7 @@ def calls(monkeypatch):
     n = {"frc": 0, "sim": 0}
     frc0, sim0 = continuation.frequency_response, stochastic.simulate
 
-    @functools.wraps(frc0)  # keeps the signature: scenes look for the stability keyword
+    @functools.wraps(frc0)
     def frc(*a, **k):
         n["frc"] += 1
         return frc0(*a, **k)
@@ -196,16 +196,12 @@ def test_cache_and_outputs_get_the_usual_mode(tmp_path, umask_027):
     assert not [f for f in files if os.path.basename(f).startswith(".tmp-")]
 
 
-def _frc_with_stability(seen, supported=True):
+def _frc_with_stability(seen):
     real = continuation.frequency_response
-    if supported:
-        def frc(model, amplitude, f_range, orders=(1, 2, 3), *, stability=True, **kw):
-            seen.append(stability)
-            return real(model, amplitude, f_range, orders=orders, **kw)
-    else:
-        def frc(model, amplitude, f_range, orders=(1, 2, 3), **kw):
-            seen.append(kw.get("stability", "not passed"))
-            return real(model, amplitude, f_range, orders=orders, **kw)
+
+    def frc(model, amplitude, f_range, orders=(1, 2, 3), *, stability=True, **kw):
+        seen.append(stability)
+        return real(model, amplitude, f_range, orders=orders, stability=stability, **kw)
     return frc
 
 
@@ -232,16 +228,6 @@ def test_no_stability_where_none_is_shown(tmp_path, monkeypatch):
     assert per2.inputs["periodic"]["stability"] is True
 
 
-def test_stability_keyword_is_passed_only_when_supported(tmp_path, monkeypatch):
-    seen = []
-    monkeypatch.setattr(continuation, "frequency_response", _frc_with_stability(seen, False))
-    scene = _write(tmp_path, PERIODIC + STOCH + PEAKS_NO_STAB)
-    rep = run_scene(scene, tmp_path / "out", quiet=True)
-    assert seen == ["not passed"]
-    (per,) = [j for j in rep.jobs if j.kind == "periodic"]
-    assert per.inputs["periodic"]["stability"] is True  # the key says what was computed
-
-
 def test_stability_only_for_outputs_that_can_do_without(tmp_path, calls):
     text = PERIODIC + STOCH + '[[figure]]\nkind = "frc"\nfile = "f.png"\nstability = false\n'
     scene = _write(tmp_path, text)
@@ -258,7 +244,7 @@ def test_stability_only_for_outputs_that_can_do_without(tmp_path, calls):
 def test_peaks_table_stops_at_f_max(tmp_path):
     """A peak near the Nyquist frequency (3224 Hz in a bundled run) is not listed: the
     table looks up to f_max (default: the upper end of the band or the diagram)."""
-    from nlbeam.scenes import _table
+    from nlbeam.app.scenes.outputs import write_table
 
     f = np.arange(0.0, 3300.0, 0.5)
     P = 1e-10 * (1 + 1e3 / (1 + ((f - 40.0) / 0.8) ** 2) + 30 / (1 + ((f - 3224.0) / 0.8) ** 2))
@@ -272,7 +258,7 @@ def test_peaks_table_stops_at_f_max(tmp_path):
     variants = [("", {}, p, s, per, sto, {"periodic": "a", "stochastic": "b"})]
 
     def freqs(d):
-        _table(dict(d, kind="peaks", file="t.csv"), variants, tmp_path)
+        write_table(dict(d, kind="peaks", file="t.csv"), variants, tmp_path)
         return [float(r["frequency_hz"]) for r in csv.DictReader(open(tmp_path / "t.csv"))]
 
     assert freqs({}) == [40.0]
@@ -296,9 +282,6 @@ def test_a_default_written_out_keys_the_same_analysis(tmp_path):
 
 
 def test_peaks_without_stability_on_the_real_continuation(tmp_path, calls):
-    from nlbeam.scenes import _stability_optional
-
-    assert _stability_optional()  # the real frequency_response takes stability=
     scene = _write(tmp_path, PERIODIC + STOCH + PEAKS_NO_STAB +
                    '[[figure]]\nkind = "compare"\nfile = "c.png"\nstability = false\n')
     out = tmp_path / "out"

@@ -1,0 +1,62 @@
+"""The defaults of the application floor, one place for the scene files and the command line.
+
+Where an analysis has a default, it is read from the function's signature, where it is
+defined once: ``continuation.frequency_response`` (orders, n_grid, segments; dt_scale from
+``continuation.Integrator``), ``stochastic.simulate`` (method, transient, psd_resolution,
+pdf_bins; None means the function derives the value: the transient from the model's slowest
+decay, the PSD bin from the duration), ``StochasticResult.psd`` (the channel),
+``nlbeam.app.compare.map_peaks`` (min_prominence), ``nlbeam.BeamImpact`` (the paper's model).
+What an analysis needs but does not default is the paper's study, set here: the base
+amplitude and frequency range of the diagram, the noise band, rms and seed (a fixed seed, so
+that a scene is reproducible and cacheable) and the record's duration.
+"""
+from __future__ import annotations
+
+import inspect
+
+import continuation
+import nlbeam
+import stochastic
+
+from .compare import map_peaks
+
+__all__ = ["signature_defaults", "PERIODIC", "STOCHASTIC", "MODEL", "CHANNEL",
+           "MIN_PROMINENCE", "HISTORY_SECONDS", "HISTORY_CHANNELS", "SIMULATE_CHANNELS"]
+
+
+def signature_defaults(func) -> dict:
+    """{parameter: default} of ``func`` (a function or a dataclass), parameters without a
+    default left out."""
+    return {k: p.default for k, p in inspect.signature(func).parameters.items()
+            if p.default is not inspect.Parameter.empty}
+
+
+_FREQUENCY_RESPONSE = signature_defaults(continuation.frequency_response)
+_INTEGRATOR = signature_defaults(continuation.Integrator)
+_SIMULATE = signature_defaults(stochastic.simulate)
+
+#: [periodic] of a scene and ``nlbeam frc``: amplitude (m), f_range (Hz), the rest as
+#: continuation.frequency_response
+PERIODIC = {"amplitude": 1e-4, "f_range": [5.0, 150.0],
+            "orders": list(_FREQUENCY_RESPONSE["orders"]),
+            "n_grid": _FREQUENCY_RESPONSE["n_grid"],
+            "segments": _FREQUENCY_RESPONSE["segments"],
+            "dt_scale": _INTEGRATOR["dt_scale"]}
+#: [stochastic] of a scene and ``nlbeam simulate``: the noise (band Hz, rms m, lowpass Hz,
+#: seed) and the record (duration s), the rest as stochastic.simulate
+STOCHASTIC = {"band": [0.0, 200.0], "rms": 1e-4, "lowpass": None, "seed": 1, "duration": 60.0,
+              "transient": _SIMULATE["transient"],
+              "psd_resolution": _SIMULATE["psd_resolution"],
+              "method": _SIMULATE["method"], "pdf_bins": _SIMULATE["pdf_bins"]}
+#: the paper's model (nlbeam.BeamImpact's defaults: m, k, b, K_hertz, e, contact, mu, clamp)
+MODEL = signature_defaults(nlbeam.BeamImpact)
+#: the channel of a figure, table or comparison that names none
+CHANNEL = signature_defaults(stochastic.StochasticResult.psd)["ch"]
+#: least peak prominence (decades) of ``nlbeam compare``
+MIN_PROMINENCE = signature_defaults(map_peaks)["min_prominence"]
+#: a history figure without ``window`` shows the first HISTORY_SECONDS s of the kept record
+HISTORY_SECONDS = 0.5
+#: ... of these channels
+HISTORY_CHANNELS = ["y", "x"]
+#: the channels ``nlbeam simulate`` records and summarizes
+SIMULATE_CHANNELS = ["delta", "x", "y"]

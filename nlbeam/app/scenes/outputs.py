@@ -1,0 +1,101 @@
+"""The outputs of a scene: its figures (drawn by nlbeam.app.plots.scene) and its CSV tables
+(moments, peaks, bifurcations), one per distinct set of the analyses each reads.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import os
+
+from .. import defaults
+from ..compare import map_peaks
+from ..files import write_text_atomic
+from ..plots.scene import scene_figure
+from .schema import build_noise, default_f_max
+
+__all__ = ["write_outputs", "write_table", "distinct"]
+
+
+def _by_variant(scene, jobs, results):
+    """[(label, model, periodic, stochastic, diagram, stochastic result, job paths)]; job
+    paths: {'periodic': cache file or None, 'stochastic': ...}."""
+    out = []
+    for label, m, p, s in scene.variants():
+        paths = {k: next((j.path for j in jobs if j.kind == k and j.variant == label), None)
+                 for k in ("periodic", "stochastic")}
+        per = results[paths["periodic"]] if paths["periodic"] else None
+        sto = results[paths["stochastic"]] if paths["stochastic"] else None
+        out.append((label, m, p, s, per, sto, paths))
+    return out
+
+
+#: which analyses each output reads
+_READS = {"frc": ("periodic",), "bifurcations": ("periodic",), "history": ("stochastic",),
+          "psd": ("stochastic",), "pdf": ("stochastic",), "excitation_psd": ("stochastic",),
+          "moments": ("stochastic",), "compare": ("periodic", "stochastic"),
+          "peaks": ("periodic", "stochastic")}
+
+
+def distinct(kind, variants):
+    """The variants an output must show: one per distinct set of the analyses it reads (a
+    sweep of a parameter the output does not depend on gives one). Labels are dropped when
+    only one is left."""
+    seen, out = set(), []
+    for v in variants:
+        key = tuple(v[6][a] for a in _READS[kind])
+        if key not in seen:
+            seen.add(key)
+            out.append(v)
+    if len(out) == 1:
+        out = [("",) + tuple(out[0][1:])]
+    return out
+
+
+def write_outputs(scene, jobs, results, out_dir, log):
+    """Write every figure and table of ``scene`` from ``results`` (cache path -> result) to
+    ``out_dir``; log each file. Returns the files written."""
+    variants = _by_variant(scene, jobs, results)
+    files = []
+    for d in scene.figures:
+        files += scene_figure(scene.title, d, distinct(d["kind"], variants), out_dir)
+    for d in scene.tables:
+        files.append(write_table(d, variants, out_dir))
+    for f in files:
+        log(f"nlbeam: wrote {f}")
+    return files
+
+
+def write_table(d, variants, out_dir):
+    """Write the CSV table of one [[table]] entry ``d`` (moments, peaks or bifurcations) over
+    the variants it distinguishes. Returns its path."""
+    kind = d["kind"]
+    ch = d.get("channel", defaults.CHANNEL)
+    rows = []
+    for label, m, p, s, per, sto, _ in distinct(kind, variants):
+        if kind == "moments":
+            mo = sto.moments(ch)
+            rows.append({"variant": label, "channel": ch,
+                         **{k: mo[k] for k in ("mean", "std", "skewness", "kurtosis",
+                                               "se_mean", "se_std", "se_skewness",
+                                               "se_kurtosis") if k in mo}})
+        elif kind == "peaks":
+            f_max = d.get("f_max", default_f_max(p, s))
+            for pk in map_peaks(sto.psd(ch), per, build_noise(s), f_range=(0.0, f_max)):
+                row = pk.as_row()
+                if not d.get("stability", True):
+                    row["stable"] = ""  # not asked for (and not computed when supported)
+                rows.append({"variant": label, "channel": ch, **row})
+        else:
+            for b in per.bifurcations:
+                rows.append({"variant": label, "kind": b.kind, "order": b.order,
+                             "frequency_hz": b.frequency, "xmax_m": b.xmax,
+                             "tolerance": b.tolerance})
+    buf = io.StringIO()
+    cols = list(dict.fromkeys(k for r in rows for k in r)) or ["variant"]
+    wr = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
+    wr.writeheader()
+    for r in rows:
+        wr.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in r.items()})
+    path = os.path.join(out_dir, d["file"])
+    write_text_atomic(path, buf.getvalue())
+    return path

@@ -1,0 +1,148 @@
+"""Planning a scene: which analyses its figures and tables need (``plan``: one Job per
+analysis and sweep value, each keyed by exactly its inputs and marked cached or not) and the
+plan as text (``format_plan``).
+
+What each output needs: ``frc`` and table ``bifurcations`` the diagram; ``psd`` the PSD of
+its channel; ``excitation_psd`` the PSD of ``y``; ``pdf`` the histogram and moments of its
+channel; ``history`` a stored time window of its channels; ``compare`` and table ``peaks``
+the diagram and the PSD. A scene without them runs neither analysis; a stochastic run keeps
+only the channels, estimators and history the outputs read.
+
+Cache: ``OUT/.nlbeam-cache/<analysis>-<key>.h5`` where key = SHA-256 of the canonical JSON
+of the analysis' inputs (model, its section with defaults filled in, the channels / outputs
+/ history it must produce) and the package version. A sidecar ``.json`` holds that text.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import nlbeam
+
+from .. import defaults
+from ..files import content_key
+from .schema import history_channels, history_window
+
+__all__ = ["CACHE_DIR", "Job", "plan", "format_plan"]
+
+CACHE_DIR = ".nlbeam-cache"
+
+
+@dataclass
+class Job:
+    """One analysis of one variant: kind 'periodic' or 'stochastic'; inputs: the exact
+    inputs (hashed into key); path: the cache file; cached: the file exists."""
+
+    kind: str
+    variant: str
+    inputs: dict
+    key: str
+    path: str
+    cached: bool = False
+    description: str = ""
+
+
+def _model_inputs(spec):
+    """The model as keyed: a BeamImpact spec with the constructor's defaults filled in, so
+    a scene that writes a default out and one that leaves it share a cache entry."""
+    if spec.get("name", "BeamImpact") != "BeamImpact":
+        return spec
+    full = {k: v for k, v in defaults.MODEL.items() if v is not None}
+    full.update((k, v) for k, v in spec.items() if k != "name")
+    return full
+
+
+def needs(scene):
+    """What the outputs read: (periodic?, stability?, channels -> set of outputs, history
+    window, history channels)."""
+    need_p = need_stab = False
+    chans = {}
+    hist = None
+    hist_ch = []
+
+    def want(ch, *what):
+        chans.setdefault(ch, set()).update(what)
+
+    for d in scene.figures + scene.tables:
+        k = d["kind"]
+        ch = d.get("channel", defaults.CHANNEL)
+        if k in ("frc", "bifurcations", "compare", "peaks"):
+            need_stab = need_stab or d.get("stability", True)
+        if k in ("frc", "bifurcations"):
+            need_p = True
+        elif k == "psd":
+            want(ch, "psd")
+        elif k == "excitation_psd":
+            want("y", "psd")
+        elif k == "pdf":
+            want(ch, "pdf", "moments")
+        elif k == "moments":
+            want(ch, "moments")
+        elif k in ("compare", "peaks"):
+            need_p = True
+            want(ch, "psd")
+        elif k == "history":
+            w = history_window(d, scene.stochastic["duration"])
+            hist = list(w) if hist is None else [min(hist[0], w[0]), max(hist[1], w[1])]
+            for c in history_channels(d):
+                if c not in hist_ch:
+                    hist_ch.append(c)
+    return need_p, need_stab, chans, hist, hist_ch
+
+
+def plan(scene, out_dir):
+    """The jobs the scene's outputs need, each marked cached or not. Returns a list of Job."""
+    need_p, need_stab, chans, hist, hist_ch = needs(scene)
+    stability = bool(need_stab)  # what is computed is what is keyed
+    cache = os.path.join(os.fspath(out_dir), CACHE_DIR)
+    jobs = []
+    for label, m, p, s in scene.variants():
+        m = _model_inputs(m)
+        if need_p:
+            p = dict(p, stability=stability)
+            inputs = {"analysis": "periodic", "model": m, "periodic": p,
+                      "version": nlbeam.__version__}
+            jobs.append(_job("periodic", label, inputs, cache,
+                             f"frequency response {p['f_range'][0]:g}-{p['f_range'][1]:g} Hz, "
+                             f"A = {p['amplitude']:g} m, orders {p['orders']}"
+                             f"{'' if stability else ', no stability'}"))
+        if chans or hist is not None:
+            channels = sorted(set(chans) | set(hist_ch))
+            outputs = sorted(set().union(*chans.values())) if chans else []
+            inputs = {"analysis": "stochastic", "model": m, "stochastic": s,
+                      "channels": channels, "outputs": outputs, "history": hist,
+                      "version": nlbeam.__version__}
+            jobs.append(_job("stochastic", label, inputs, cache,
+                             f"{s['duration']:g} s under band {s['band'][0]:g}-{s['band'][1]:g} Hz"
+                             f"{', low-pass %g Hz' % s['lowpass'] if s.get('lowpass') else ''}, "
+                             f"seed {s['seed']}, channels {channels}, outputs {outputs}"
+                             f"{', history %s s' % hist if hist else ''}"))
+    return jobs
+
+
+def _job(kind, label, inputs, cache, desc):
+    key = content_key(inputs)
+    path = os.path.join(cache, f"{kind}-{key}.h5")
+    return Job(kind, label, inputs, key, path, os.path.exists(path), desc)
+
+
+def format_plan(scene, jobs, out_dir):
+    """Human-readable plan: what will be computed, what is reused, what is written."""
+    lines = [f"scene {scene.path}: {scene.title}"]
+    first = {}
+    for j in jobs:
+        var = f" [{j.variant}]" if j.variant else ""
+        if j.path in first:  # a sweep value this analysis does not depend on
+            lines.append(f"  shared  {j.kind}{var}: the same as{first[j.path]}")
+            continue
+        first[j.path] = var or " above"
+        state = "cached " if j.cached else "compute"
+        lines.append(f"  {state} {j.kind}{var}: {j.description}")
+        lines.append(f"          -> {j.path}")
+    if not jobs:
+        lines.append("  (no analysis needed)")
+    for d in scene.figures:
+        lines.append(f"  write   figure {d['kind']}: {os.path.join(out_dir, d['file'])}")
+    for d in scene.tables:
+        lines.append(f"  write   table {d['kind']}: {os.path.join(out_dir, d['file'])}")
+    return "\n".join(lines)
