@@ -120,3 +120,41 @@ def test_collisions_split_runs_and_onset_rate():
     assert len(cs) == 2
     assert cs[0].rate_onset == pytest.approx(0.1)
     assert cs[1].rate_onset == pytest.approx(0.05 + (1 / 3) * 0.15)
+
+
+def test_command_line_reads_a_csv_prints_the_fit_and_writes_the_figure(ln_data, tmp_path,
+                                                                       capsys):
+    from nlbeam.app.cli import main
+
+    d, r, f = (np.concatenate(x) for x in ln_data)
+    csv = tmp_path / "collisions.csv"
+    rows = "\n".join(f"{a:.17g},{b:.17g},{c:.17g}" for a, b, c in zip(d, r, f))
+    csv.write_text("delta,rate,force\n" + rows + "\n")
+    png = tmp_path / "fit.png"
+    assert main(["identify", str(csv), "--plot", str(png)]) == 0
+    out = capsys.readouterr().out
+    assert "K_hertz = 2.1e+08" in out and "e = 0.5" in out
+    assert png.stat().st_size > 10_000
+    bad = tmp_path / "bad.csv"
+    bad.write_text("delta,velocity,force\n1,2,3\n")
+    assert main(["identify", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "no column 'rate'" in err and "'velocity'" in err and len(err.strip().splitlines()) == 1
+
+
+def test_fit_figure_shows_measured_and_fitted_force(ln_data):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from nlbeam.app.plots.identify import plot_contact_fit
+
+    fit = identify_contact(*ln_data)
+    fig = plot_contact_fit(fit, *ln_data)
+    ax = fig.axes[0]
+    assert "[um]" in ax.get_xlabel() and "[N]" in ax.get_ylabel()
+    lines = ax.get_lines()
+    assert len(lines) == 2 * len(SPEEDS) + 1  # measured + fitted per collision, legend key
+    measured, fitted = lines[0].get_ydata(), lines[1].get_ydata()
+    np.testing.assert_allclose(fitted, measured, rtol=1e-6, atol=1e-9 * measured.max())
+    plt.close(fig)
