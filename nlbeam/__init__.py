@@ -26,6 +26,7 @@ _HOME = {
     "CosineSum": "excitation",
     "integrate": "integrate", "flow": "integrate", "Trajectory": "integrate", "Flow": "integrate",
     "IntegrationError": "integrate", "default_dt": "integrate",
+    "identify_contact": "identify", "ContactFit": "identify",
 }
 #: the modules ``import nlbeam`` used to load, reachable as attributes as before
 _CORE = ("systems", "modal", "excitation", "custom", "_kernels", "_validate")

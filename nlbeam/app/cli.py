@@ -1,4 +1,4 @@
-"""Command line: ``nlbeam demo | frc | simulate | compare | run | figures``.
+"""Command line: ``nlbeam demo | frc | simulate | compare | identify | run | figures``.
 
 Units everywhere: SI (m, s, kg, N), frequencies in Hz. Progress goes to stderr; ``--quiet``
 silences it. A warning is one line on stderr (``nlbeam CMD: warning: ...``), --quiet or not. On
@@ -130,6 +130,26 @@ def _simulate(args):
 
         files_backend()
         save_figure(channel_psds(res), args.plot)
+    return 0
+
+
+def _identify(args):
+    from nlbeam.identify import identify_contact
+
+    from .files.columns import read_columns
+
+    names = (args.delta_column, args.rate_column, args.force_column)
+    cols = read_columns(args.file, required=names)
+    d, r, f = (cols[n] for n in names)
+    fit = identify_contact(d, r, f, law=args.law, method=args.method)
+    if not args.quiet:
+        print(fit)
+    if args.plot:
+        from .plots.files import files_backend, save_figure
+        from .plots.identify import plot_contact_fit
+
+        files_backend()
+        save_figure(plot_contact_fit(fit, d, r, f), args.plot)
     return 0
 
 
@@ -329,6 +349,28 @@ def _parser():
                    help="upper frequency (Hz) of the peaks considered and of the plot, default all")
     p.add_argument("--plot", default=None, help="write the comparison figure (PNG/PDF/SVG)")
     p.set_defaults(func=_compare)
+
+    p = sub.add_parser("identify", parents=[common], help="estimate the contact law's "
+                       "parameters (K_hertz, e or mu) from measured collisions",
+                       description="Read indentation delta (m, > 0 in contact), its rate (m/s) "
+                       "and the contact force (N) from a CSV file with a header line (or an "
+                       "HDF5 file with one dataset per column), split the record into "
+                       "collisions, and fit the contact law: by least squares over every "
+                       "sample in contact (standard errors from the sandwich covariance) or "
+                       "the paper's recipe (K at maximum indentation, e from the hysteresis "
+                       "loop energy, eqs. 2, 5, 6). See nlbeam.identify. " + _UNITS)
+    p.add_argument("file", help="CSV (header line with the column names) or HDF5 file")
+    p.add_argument("--law", default="lankarani-nikravesh",
+                   choices=("hertz", "lankarani-nikravesh", "hunt-crossley"),
+                   help="contact law to fit, default lankarani-nikravesh")
+    p.add_argument("--method", default="least-squares", choices=("least-squares", "paper"),
+                   help="estimator, default least-squares")
+    p.add_argument("--delta-column", default="delta", help="indentation column, default delta")
+    p.add_argument("--rate-column", default="rate", help="indentation-rate column, default rate")
+    p.add_argument("--force-column", default="force", help="contact-force column, default force")
+    p.add_argument("--plot", default=None,
+                   help="write force against indentation, measured and fitted (PNG/PDF/SVG)")
+    p.set_defaults(func=_identify)
 
     def run_opts(p):
         p.add_argument("--dry-run", action="store_true",
