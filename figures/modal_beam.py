@@ -89,7 +89,7 @@ def main(argv=None):
     frcs = {n: diagram(n) for n in args.modes}
     fig, axs = plt.subplots(1, len(frcs), figsize=(5 * len(frcs), 4.5), sharey=True, squeeze=False)
     for ax, (n, frc) in zip(axs[0], frcs.items()):
-        plot_frequency_response(frc, ax, grazing=False)
+        plot_frequency_response(frc, ax, grazing=False, legend=ax is axs[0, -1])
         ax.set_title(f"ModalBeam.paper(n_modes={n})" + ("  = BeamImpact.paper()" if n == 1 else ""))
         if ax is not axs[0, 0]:
             ax.set_ylabel("")

@@ -91,11 +91,7 @@ def _frc(args):
         from .plots.frequency_response import plot_frequency_response
 
         files_backend()
-        import matplotlib.pyplot as plt
-
-        fig, ax = plt.subplots(figsize=(8, 5))
-        plot_frequency_response(frc, ax)
-        save_figure(fig, args.plot)
+        save_figure(plot_frequency_response(frc), args.plot)
     return 0
 
 
@@ -120,16 +116,20 @@ def _simulate(args):
     res.save(args.out)
     log(f"nlbeam simulate: {res.n_impacts} impacts in {res.wall_time:.1f} s -> {args.out}")
     if not args.quiet:
+        from .plots.units import channel_unit, excitation_kind
+
+        kind = excitation_kind(res.model_parameters)
         for ch in res.channels:
             mo = res.moments(ch)
-            print(f"{ch:6s} mean {mo['mean']:+.4e}  std {mo['std']:.4e}  "
+            u = channel_unit(ch, kind)[0]
+            print(f"{ch:6s} mean {mo['mean']:+.4e} {u}  std {mo['std']:.4e} {u}  "
                   f"skewness {mo['skewness']:+.3f}  kurtosis {mo['kurtosis']:.3f}")
     if args.plot:
         from .plots.files import files_backend, save_figure
         from .plots.stochastic import channel_psds
 
         files_backend()
-        save_figure(channel_psds(res), args.plot)
+        save_figure(channel_psds(res, f_max=args.f_max), args.plot)
     return 0
 
 
@@ -333,6 +333,9 @@ def _parser():
     model_opts(p)
     p.add_argument("--out", default="stochastic.h5", help="HDF5 result file, default stochastic.h5")
     p.add_argument("--plot", default=None, help="also write the PSDs (PNG/PDF/SVG)")
+    p.add_argument("--f-max", type=float, default=None,
+                   help="upper frequency (Hz) of the --plot figure, default twice the band's "
+                   "upper edge (at most the Nyquist frequency)")
     p.set_defaults(func=_simulate)
 
     p = sub.add_parser("compare", parents=[common], help="trace the peaks of a stochastic PSD "

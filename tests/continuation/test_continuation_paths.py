@@ -197,7 +197,8 @@ def test_plot_draws_branches_and_marks(pd_diagram, tmp_path):
     matplotlib.use("Agg")
     from continuation.plot import plot_frequency_response
     m, frc = pd_diagram
-    ax = plot_frequency_response(frc)
+    fig = plot_frequency_response(frc)
+    ax = fig.axes[0]
     dashed = [l for l in ax.lines if l.get_linestyle() == "--"]
     assert dashed  # unstable parts drawn dashed
     ax.figure.savefig(tmp_path / "f.png")

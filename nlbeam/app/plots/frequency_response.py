@@ -4,23 +4,42 @@ from __future__ import annotations
 
 import numpy as np
 
+from .units import excitation_kind
+
 _MARK = {"fold": ("o", "fold", 6), "period-doubling": ("s", "period doubling", 6),
          "neimark-sacker": ("^", "Neimark-Sacker", 6), "grazing": ("x", "grazing", 4)}
 _COLOURS = {1: "C0", 2: "C3", 3: "C2", 4: "C1", 6: "C4"}
 
 __all__ = ["plot_frequency_response"]
 
+#: units of the continuation parameters on the x axis (amplitude: by excitation kind)
+_PARAMETER_UNITS = {"frequency": "Hz", "e": "-", "K_hertz": "N/m$^{1.5}$", "gap": "m",
+                    "m": "kg", "k": "N/m", "b": "kg/s", "mu": "N s/m$^{2.5}$"}
 
-def plot_frequency_response(frc, ax=None, *, scale=1e3, unit="mm", grazing=True):
+
+def _response_label(params, unit):
+    n = params.get("n_dof", params.get("n_modes", 1))
+    if params.get("model") == "ModalBeam":
+        return f"|x|max at the stop [{unit}]"
+    if isinstance(n, (int, np.integer)) and n > 1:
+        return f"|x|max of the output DOF [{unit}]"
+    return f"|x|max [{unit}]"
+
+
+def plot_frequency_response(frc, ax=None, *, scale=1e3, unit="mm", grazing=True, legend=True,
+                            path=None):
     """|x|max against frequency: stable solid, unstable dashed (all solid for a diagram computed
-    with stability=False), one colour per order,
-    bifurcations marked (folds circles, period doublings squares, Neimark-Sacker triangles,
-    grazing points small crosses unless ``grazing=False``), superharmonic resonances labelled
-    with their order. Returns the Axes."""
+    with stability=False), one colour per order, bifurcations marked (folds circles, period
+    doublings squares, Neimark-Sacker triangles, grazing points small crosses unless
+    ``grazing=False``), superharmonic resonances labelled with their order. The legend (orders,
+    line styles, markers) stands outside the axes, right of the data (``legend=False``: none, e.g.
+for all but the last panel of a row). ``path``: also write the
+    figure (then closed if this call opened it). Returns the Figure."""
     import matplotlib.pyplot as plt
 
+    opened = ax is None
     if ax is None:
-        _, ax = plt.subplots(figsize=(8, 5))
+        _, ax = plt.subplots(figsize=(9, 5))
     seen = set()
     for b in frc.branches:
         c = _COLOURS.get(b.order, "k")
@@ -58,11 +77,39 @@ def plot_frequency_response(frc, ax=None, *, scale=1e3, unit="mm", grazing=True)
                     (sh.frequency, sh.xmax * scale), textcoords="offset points",
                     xytext=(dx, 18 + 26 * level), ha=ha, fontsize=8,
                     arrowprops=dict(arrowstyle="-", lw=0.6))
-    ax.set_xlim(*frc.p_range)
-    ax.set_xlabel("excitation frequency [Hz]" if frc.parameter == "frequency" else frc.parameter)
-    ax.set_ylabel(f"|x|max [{unit}]")
+    ax.set_xlim(*sorted(frc.p_range))
+    params = dict(frc.model_parameters or {})
+    force = excitation_kind(params) == "force"
+    a_unit, a_scale = ("N", 1.0) if force else (unit, scale)
+    if frc.parameter == "frequency":
+        ax.set_xlabel("excitation frequency [Hz]")
+    elif frc.parameter == "amplitude":
+        ax.set_xlabel(f"{'force' if force else 'base'} amplitude [{'N' if force else 'm'}]")
+    else:
+        ax.set_xlabel(f"{frc.parameter} [{_PARAMETER_UNITS.get(frc.parameter, '-')}]")
+    ax.set_ylabel(_response_label(params, unit))
     known = all(b.stable is not None for b in frc.branches)
-    ax.set_title(f"periodic solutions, base amplitude {frc.amplitude * scale:g} {unit} "
-                 + ("(solid stable, dashed unstable)" if known else "(stability not computed)"))
-    ax.legend(fontsize=8, loc="upper right")
-    return ax
+    what = "force amplitude" if force else "base amplitude"
+    title = f"periodic solutions, {what} {frc.amplitude * a_scale:g} {a_unit}"
+    if frc.parameter == "amplitude":
+        title = "periodic solutions under amplitude continuation"
+    ax.set_title(title, fontsize=10)
+    if known:
+        ax.plot([], [], "-", color="0.3", lw=1.3, label="stable (solid)")
+        ax.plot([], [], "--", color="0.3", lw=0.9, label="unstable (dashed)")
+    else:
+        ax.plot([], [], "-", color="0.3", lw=1.3, label="stability not computed")
+    if legend:
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+                  frameon=False)
+    fig = ax.figure
+    if opened:
+        fig.tight_layout()
+    if path is not None:
+        from .files import save_figure
+
+        if opened:
+            save_figure(fig, path)
+        else:
+            fig.savefig(path)
+    return fig

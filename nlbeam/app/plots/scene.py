@@ -44,9 +44,10 @@ def scene_figure(scene_title, d, variants, out_dir):
             path = _suffixed(target, i, len(variants))
             t = title + (f" ({label})" if label else "")
             if kind == "frc":
-                fig, ax = plt.subplots(figsize=(8, 5))
+                fig, ax = plt.subplots(figsize=(9, 5))
                 plot_frequency_response(per, ax)
                 ax.set_title(t)
+                fig.tight_layout()
             elif kind == "compare":
                 f_max = d.get("f_max", default_f_max(p, s))
                 fig = plot_comparison(sto.psd(ch), per, excitation=build_noise(s), label=ch,

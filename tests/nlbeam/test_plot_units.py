@@ -1,0 +1,134 @@
+"""Every figure kind, for a base- and a force-excited system: the labels carry the units of
+the one units table, the axes end where the data and the requested range end."""
+import warnings
+
+import matplotlib
+import numpy as np
+import pytest
+
+import continuation
+import nlbeam
+import stochastic
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from nlbeam.app.plots import stochastic as splot  # noqa: E402
+from nlbeam.app.plots.frequency_response import plot_frequency_response  # noqa: E402
+from nlbeam.app.plots.units import channel_unit, log_limits  # noqa: E402
+
+BAND = (30.0, 60.0)
+
+
+def _force_system():
+    return nlbeam.System([[1.0]], [[0.5]], [[4.0e4]], elements=(
+        nlbeam.PiecewiseLinearStop(0, k=4.0e5, gap=1e-5, on_base=False),),
+        excitation_kind="force", y_load=[1.0])
+
+
+@pytest.fixture(scope="module", params=["base", "force"])
+def result(request):
+    if request.param == "base":
+        model, rms = nlbeam.BeamImpact.paper(), 1e-4
+    else:
+        model, rms = _force_system(), 0.5
+    noise = stochastic.BandLimitedNoise(band=BAND, rms=rms, seed=4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = stochastic.simulate(model, noise, duration=8.0, transient=1.0,
+                                  channels=("delta", "x", "y", "force"), psd_resolution=1.0,
+                                  keep_history=(1.0, 1.5), method="rk4")
+    return request.param, res
+
+
+def test_units_table():
+    assert channel_unit("x[1]") == ("m", "mm", 1e3)
+    assert channel_unit("y", "force") == ("N", "N", 1.0)
+    assert channel_unit("yd", "force") == ("N/s", "N/s", 1.0)
+    assert channel_unit("force") == ("N", "N", 1.0)
+    with pytest.raises(ValueError, match="ch: unknown channel 'q'"):
+        channel_unit("q")
+    lo, hi = log_limits([1e-30, 1e-12, 1e-6])
+    assert hi == pytest.approx(3e-6) and lo == pytest.approx(3e-14)
+
+
+def test_response_psd_labels_and_limits(result):
+    kind, res = result
+    for ch, unit in (("delta", "m$^2$/Hz"), ("force", "N$^2$/Hz")):
+        fig = splot.response_psd(res, ch)
+        ax = fig.axes[0]
+        assert ax.get_ylabel() == f"PSD of {ch} [{unit}]"
+        assert ax.get_xlabel() == "frequency [Hz]"
+        assert ax.get_xlim() == (0.0, 2 * BAND[1])  # twice the band's upper edge
+        f, P = res.psd(ch)
+        shown = P[(f <= 2 * BAND[1]) & (P > 0)]
+        lo, hi = ax.get_ylim()
+        assert hi == pytest.approx(3 * shown.max())
+        assert lo >= hi * 1e-8 * 0.999  # at most 8 decades, not the leakage floor
+        plt.close(fig)
+    fig = splot.response_psd(res, "delta", f_max=45.0)
+    assert fig.axes[0].get_xlim() == (0.0, 45.0)
+    plt.close(fig)
+    with pytest.raises(ValueError, match="f_max"):
+        splot.response_psd(res, "delta", f_max=-1.0)
+
+
+def test_excitation_psd_in_the_excitation_unit(result):
+    kind, res = result
+    fig = splot.excitation_psd(res, f_max=80.0)
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == ("PSD of y [m$^2$/Hz]" if kind == "base" else "PSD of y [N$^2$/Hz]")
+    assert ax.get_xlim() == (0.0, 80.0)
+    plt.close(fig)
+
+
+def test_pdf_and_history_units(result, tmp_path):
+    kind, res = result
+    fig = splot.pdf(res, "force")
+    assert fig.axes[0].get_xlabel() == "force [N]"
+    assert fig.axes[0].get_ylabel() == "probability density [1/N]"
+    plt.close(fig)
+    fig = splot.pdf(res, "x")
+    assert fig.axes[0].get_xlabel() == "x [mm]"
+    c, d = res.pdf("x")
+    assert fig.axes[0].get_ylim()[1] >= d.max() / 1e3  # the peak is inside the axes
+    plt.close(fig)
+    path = tmp_path / "h.png"
+    fig = splot.time_history(res, ("y", "x"), path=path)
+    assert path.stat().st_size > 5000
+    labels = sorted(a.get_ylabel() for a in fig.axes)
+    assert labels == (["y, x [mm]"] if kind == "base" else ["x [mm]", "y [N]"])
+    assert not plt.fignum_exists(fig.number)  # a figure it opened and saved is closed
+
+
+def test_channel_psds_one_panel_per_channel(result):
+    kind, res = result
+    fig = splot.channel_psds(res)
+    assert len(fig.axes) == len(res.channels)
+    assert [a.get_ylabel().split(" [")[0] for a in fig.axes] == [
+        f"PSD of {ch}" for ch in res.channels]
+    assert all(a.get_xlim() == (0.0, 2 * BAND[1]) for a in fig.axes)
+    plt.close(fig)
+
+
+def test_diagram_titles_name_the_excitation_and_the_legend_the_line_styles():
+    m = nlbeam.BeamImpact.paper()
+    frc = continuation.frequency_response(m, 1e-4, (40.0, 46.0), orders=(1,), n_grid=4)
+    fig = plot_frequency_response(frc)
+    ax = fig.axes[0]
+    assert "base amplitude 0.1 mm" in ax.get_title()
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "stable (solid)" in texts and "unstable (dashed)" in texts
+    # the legend stands right of the axes: it covers no data
+    fig.canvas.draw()
+    leg = ax.get_legend().get_window_extent()
+    assert leg.x0 >= ax.get_window_extent().x1
+    plt.close(fig)
+    s = _force_system()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        frc = continuation.frequency_response(s, 2.0, (25.0, 40.0), orders=(1,), n_grid=4)
+    ax = plot_frequency_response(frc).axes[0]
+    assert "force amplitude 2 N" in ax.get_title()
+    assert ax.get_xlabel() == "excitation frequency [Hz]"
+    plt.close(ax.figure)
