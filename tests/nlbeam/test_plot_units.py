@@ -3,7 +3,6 @@ the one units table, the axes end where the data and the requested range end."""
 import warnings
 
 import matplotlib
-import numpy as np
 import pytest
 
 import continuation
