@@ -8,7 +8,7 @@ with ``transfer(old_problem, u, p)``. Work is done in scaled variables (u / scal
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -185,6 +185,7 @@ class Tracer:
         dz_norm = np.inf
         res_prev = np.inf
         r_prev = None
+        z_prev = ev_prev = None  # the previous iterate and its evaluation
         self.impacts_seen = set()
         for it in range(1, self.max_iter + 1):
             try:
@@ -499,7 +500,7 @@ class Tracer:
         best, lo_p, hi_p = pb, pa.p, pb.p
         if jumped:
             w, wp = prob.scale_u, prob.scale_p
-            u_lo, u_hi = pa.u, pb.u
+            u_lo = pa.u
             for _ in range(self.grazing_iter):
                 pm = 0.5 * (lo_p + hi_p)
                 e_p = np.zeros(len(u_lo) + 1)
@@ -515,7 +516,7 @@ class Tracer:
                 if q.n_impacts == pa.n_impacts:
                     lo_p, u_lo = pm, u
                 else:
-                    hi_p, u_hi, best = pm, u, q
+                    hi_p, best = pm, q
             return best, abs(best.p - lo_p)  # the reported point to the near side
         lo, hi = 0.0, ds
         for _ in range(self.grazing_iter):
