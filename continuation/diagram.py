@@ -501,9 +501,10 @@ def _superharmonics(branches, model, integrator, orders=(2, 3), window=0.15, min
     """Superharmonic resonances of order k on the harmonic (order-1) branches: among the local
     maxima of xmax along a branch with k f within ``window`` (relative) of the main resonance
     (the frequency of the largest xmax), the one where the k-th harmonic of the relative
-    response is largest, if it is at least ``min_ratio`` of the first. The frequency is that of the branch point (tolerance: half
-    the distance to its neighbours) of the vertex of a parabola through the peak point and its
-    neighbours."""
+    response is largest, if it is at least ``min_ratio`` of the first. The frequency is that
+    of the branch point (tolerance: half the distance to its neighbours) of the vertex of a
+    parabola through the peak point and its neighbours. The harmonics are integrated with
+    ``integrator``."""
     out = []
     ones = [(bi, b) for bi, b in enumerate(branches) if b.order == 1 and len(b.xmax) >= 3]
     if not ones:

@@ -24,6 +24,7 @@ from nlbeam.integrate import FlowMap
 from nlbeam.solver import Solver, period_step, phase_step
 
 from ._newton import ConvergenceError, ContinuationWarning, newton
+from .pathfollow import Problem
 
 
 def forcing(amplitude, frequency):
@@ -105,14 +106,14 @@ def clearance(model, states, y):
     return -np.max(d, axis=1)
 
 
-class ShootingProblem:
+class ShootingProblem(Problem):
     """The periodic-orbit problem R(u, p) = 0 of one model, excitation amplitude and order.
 
     parameter: 'frequency' (Hz), 'amplitude' (m or N), or the name of a model field
     (dataclasses.replace is used: 'e', 'K_hertz', ...). ``fixed`` holds the values of the other
     two of (frequency, amplitude). boundaries: excitation phases of the segment starts.
-    Protocol used by the path follower: ``evaluate``, ``n``, ``scale_u``, ``scale_p``,
-    ``multipliers``, ``xmax``, ``adapt``.
+    The path follower's protocol (continuation.pathfollow.Problem), with its optional
+    ``variational``, ``jacobian_u`` and ``settle``.
     """
 
     def __init__(self, model, amplitude, frequency, order, boundaries, integrator,

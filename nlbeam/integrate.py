@@ -214,7 +214,8 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
     stepped onto; no step crosses a contact boundary (``events=False`` switches this off, for
     comparison only). With ``graded`` (default) the fixed-step methods step the start of each
     contact uniformly in sqrt(t - t_onset) and its end uniformly in sqrt(delta), which keeps
-    their order across the delta^1.5 singularity of Hertz-type contact forces. x0: initial state [x_1..x_N, v_1..v_N] (default: at rest).
+    their order across the delta^1.5 singularity of Hertz-type contact forces.
+    x0: initial state [x_1..x_N, v_1..v_N] (default: at rest).
     store_every: keep every k-th grid sample (0: none, only the end state).
     event_log: how many contact events to record in ``Trajectory.events`` (memory bound).
     warn: warn when a contact got fewer than 8 steps (``Trajectory.min_steps_per_contact`` tells
