@@ -251,6 +251,8 @@ def flow(model, excitation, state0, t0, duration, *, monodromy=False, disc0=None
     Runge-Kutta stages (the exact derivative of the fixed-step map between events), and the
     Lankarani-Nikravesh onset velocity carries its own sensitivity row, updated at every onset.
     For a fixed-step method, dt is adjusted down so that duration / dt is an integer.
+    warn: warn when a contact got fewer than 8 steps (fixed-step methods). One call of a
+    ``FlowMap``; the step decisions are those of nlbeam.solver.Solver.
     """
     finite("t0", t0)
     finite("duration", duration)

@@ -1,5 +1,5 @@
-"""nlbeam.integrate.FlowMap: the same kernel call as nlbeam.flow, hence bitwise the same
-results, with the per-call checks done once."""
+"""nlbeam.integrate.FlowMap: one map called many times (per-call step and contact state)
+gives bitwise what fresh nlbeam.flow calls give, with the per-call checks done once."""
 import numpy as np
 import pytest
 
