@@ -191,31 +191,28 @@ class ShootingProblem(Problem):
         return fm
 
     def flow_phases(self, model, ex, state, phase0, dphi, *, disc0=None, monodromy=False,
-                    span_step=True, max_steps=100_000_000):
+                    span_step=True, newton=False):
         """The nlbeam.Flow of ``state`` (2N,) from excitation phase ``phase0`` over ``dphi``
         excitation periods of ex (a harmonic excitation), with this problem's integrator:
         steps_per_period fixed steps per period, rounded to a whole number over dphi
         (Solver's phase_step). For the adaptive method the step argument (output spacing) is
         the whole span with ``span_step`` (as the shooting segments), else the Solver's
         default. disc0: the contact state at the start (None: the start-in-contact rule).
-        Raises nlbeam.IntegrationError."""
+        Raises nlbeam.IntegrationError; with ``newton`` (the flows of Newton's residual) at
+        most 50 times the nominal steps + 20000, and a failed integration is a failed Newton
+        step (ConvergenceError)."""
         f = ex.frequency
         dur = dphi / f
         if self.steps_per_period or span_step:
             dt = phase_step(dur, self.steps_per_period * dphi)
         else:
             dt = self.integrator.solver.default_dt(model, ex)
-        return self._flowmap(model, ex)(state, phase0 / f, dur, monodromy=monodromy,
-                                        disc0=disc0, dt=dt, max_steps=max_steps)
-
-    def _flow(self, model, ex, s, phase0, dphi, mono):
-        """flow_phases for Newton's residual: an integration that fails is a failed step."""
-        f = ex.frequency
-        dur = dphi / f
-        dt = phase_step(dur, self.steps_per_period * dphi)
+        fm = self._flowmap(model, ex)
+        if not newton:
+            return fm(state, phase0 / f, dur, monodromy=monodromy, disc0=disc0, dt=dt)
         try:
-            return self.flow_phases(model, ex, s, phase0, dphi, monodromy=mono,
-                                    max_steps=int(50 * dur / dt) + 20000)
+            return fm(state, phase0 / f, dur, monodromy=monodromy, disc0=disc0, dt=dt,
+                      max_steps=int(50 * dur / dt) + 20000)
         except nlbeam.IntegrationError as exc:
             # an iterate far from any orbit (e.g. a huge penetration): a failed Newton step
             raise ConvergenceError(f"shooting: integration failed ({exc}); try a smaller step, "
@@ -237,7 +234,7 @@ class ShootingProblem(Problem):
         n_imp = 0
         var = mono and self.variational
         for j, phase0, dphi in self._segments():
-            fl = self._flow(model, ex, U[j], phase0, dphi, var)
+            fl = self.flow_phases(model, ex, U[j], phase0, dphi, monodromy=var, newton=True)
             ends[j] = fl.state
             n_imp += fl.n_impacts
             xm = max(xm, float(fl.xmax[self.out]))
@@ -256,8 +253,8 @@ class ShootingProblem(Problem):
                     h = 1e-7 * sc[j * self.N2 + k]
                     s1 = U[j].copy()
                     s1[k] += h
-                    M[:, k] = (self._flow(model, ex, s1, phase0, dphi, False).state
-                               - fl.state) / h
+                    M[:, k] = (self.flow_phases(model, ex, s1, phase0, dphi,
+                                                newton=True).state - fl.state) / h
                 Ms.append(M)
         self.last_impacts = n_imp
         return ends, Ms, xm
