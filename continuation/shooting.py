@@ -21,7 +21,9 @@ import numpy as np
 
 import nlbeam
 from nlbeam.integrate import FlowMap
+from nlbeam._validate import choice
 from nlbeam.solver import Solver, period_step, phase_step
+from nlbeam.vocabulary import METHODS as METHOD_NAMES
 
 from ._newton import ConvergenceError, ContinuationWarning, newton
 from .pathfollow import Problem
@@ -48,8 +50,7 @@ class Integrator:
     atol: float = 1e-14
 
     def __post_init__(self):
-        if self.method not in ("rk4", "rk2", "adaptive"):
-            raise ValueError(f"method: must be 'rk4', 'rk2' or 'adaptive', got {self.method!r}")
+        choice("method", self.method, METHOD_NAMES)
         if not (math.isfinite(self.dt_scale) and self.dt_scale > 0):
             raise ValueError(f"dt_scale: must be finite and > 0, got {self.dt_scale!r}")
         _ = self.solver  # a Solver checks steps_per_contact, rtol, atol

@@ -32,8 +32,12 @@ import numpy as np
 
 from . import _kernels as _k
 from ._validate import choice, positive
+from .vocabulary import METHODS as METHOD_NAMES
 
 METHODS = {"rk2": _k.RK2, "rk4": _k.RK4, "adaptive": _k.DP5}  # name -> kernel code
+if tuple(METHODS) != METHOD_NAMES:
+    raise ImportError(f"nlbeam.solver: the kernel codes are given for {tuple(METHODS)}, the "
+                      f"vocabulary has {METHOD_NAMES}: give each method its code")
 
 # defaults: steps per period of the fastest of (excitation, linear natural frequency), and
 # steps per contact. Accuracy they give on the paper model is stated in the README. For the
@@ -94,7 +98,7 @@ class Solver:
     graded: bool = True
 
     def __post_init__(self):
-        choice("method", self.method, tuple(METHODS))
+        choice("method", self.method, METHOD_NAMES)
         if self.dt is not None:
             positive("dt", self.dt, unit="s")
         if self.steps_per_contact is not None:
