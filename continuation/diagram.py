@@ -9,11 +9,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import nlbeam
+from nlbeam.solver import ADAPTIVE_SAMPLES_PER_PERIOD, period_step
 
 from ._newton import ContinuationWarning, ConvergenceError
 from .pathfollow import Tracer
-from .shooting import (Integrator, ShootingProblem, _problem_from_state, decay_rate,
-                       solve_problem)
+from .shooting import Integrator, ShootingProblem, _problem_from_state, decay_rate, forcing
 
 
 @dataclass
@@ -167,13 +167,12 @@ def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=
     for sweep in (freqs, freqs[::-1]):
         x = None
         for f in sweep:
-            spp = integrator.steps_per_period(model, f) or 200
+            # one stored sample per period: every spp-th step (adaptive: output sample)
+            spp = integrator.steps_per_period(model, f) or ADAPTIVE_SAMPLES_PER_PERIOD
             n_tr = int(min(4000, max(40, math.ceil(efolds / rate * f))))
             n_tot = n_tr + 4 * nmax
-            tr = nlbeam.integrate(model, nlbeam.Harmonic(amplitude, f), n_tot / f,
-                                  method=integrator.method, dt=1.0 / (f * spp), x0=x,
-                                  store_every=spp, steps_per_contact=integrator.steps_per_contact,
-                                  rtol=integrator.rtol, atol=integrator.atol, warn=False)
+            tr = integrator.integrate(model, forcing(amplitude, f), n_tot / f,
+                                      period_step(f, spp), x0=x, store_every=spp)
             S = np.hstack([tr.x, tr.v])[: n_tot + 1]
             x = tr.state_end
             tail = S[-(3 * nmax + 1):]
@@ -216,16 +215,6 @@ def _on_branch(branches, order, f, xmax, state0, rel=2e-3, state_rel=0.05):
     return None
 
 
-def _dominant_harmonic(prob, u, p):
-    """The harmonic of f with the largest amplitude in x (output DOF) over one period."""
-    tr = prob.trajectory(u, p, n_samples=512)
-    x = tr.x[:-1, prob.out]
-    n = len(x)
-    X = np.abs(np.fft.rfft(x - x.mean())) / n
-    k = int(np.argmax(X[1:])) + 1
-    return k // prob.order if prob.order > 1 else k
-
-
 def _switch(tracer, pt, order):
     """Start the period-2T branch at a period-doubling point: the problem of twice the order
     with the -1 eigenvector as predictor direction. Returns (problem, u, p, t0) or None."""
@@ -258,14 +247,9 @@ def _halves_vector(pt):
     """(state after half the period - state at the first boundary) / scales, of an orbit of
     even order: zero on an orbit of half the order."""
     prob = pt.problem
-    model, A, f = prob.setup(pt.p)
+    model, ex = prob.forcing(pt.p)
     U = pt.u.reshape(prob.n_seg, prob.N2)
-    half = prob.order // 2
-    fl = nlbeam.flow(model, nlbeam.Harmonic(A, f), U[0], prob.boundaries[0] / f, half / f,
-                     method=prob.integrator.method, rtol=prob.integrator.rtol,
-                     atol=prob.integrator.atol,
-                     dt=1.0 / (f * prob.steps_per_period) if prob.steps_per_period else None,
-                     warn=False)
+    fl = prob.flow_phases(model, ex, U[0], prob.boundaries[0], prob.order // 2, span_step=False)
     return (fl.state - U[0]) / prob.scale_u[:prob.N2]
 
 
@@ -349,16 +333,10 @@ def _shifted_states(prob, u, p):
     s0, d0 = prob.state_at_zero(u, p)
     out = [s0]
     if prob.order > 1:
-        model, A, f = prob.setup(p)
-        it = prob.integrator
-        spp = prob.steps_per_period
-        fl = None
+        model, ex = prob.forcing(p)
         s, d = s0, d0
         for k in range(1, prob.order):
-            fl = nlbeam.flow(model, nlbeam.Harmonic(A, f), s, (k - 1) / f, 1 / f, disc0=d,
-                             method=it.method, dt=1 / (f * spp) if spp else None,
-                             steps_per_contact=it.steps_per_contact, rtol=it.rtol, atol=it.atol,
-                             warn=False)
+            fl = prob.flow_phases(model, ex, s, k - 1, 1, disc0=d, span_step=False)
             s, d = fl.state, fl.disc
             out.append(s)
     return np.array(out)
@@ -493,11 +471,14 @@ def _polish(prob, u0, p, tol):
     return prob, u, p
 
 
-def _harmonic_amplitudes(model, amplitude, f, state0, n_samples=512):
+def _harmonic_amplitudes(model, amplitude, f, state0, n_samples=512, integrator=None):
     """Amplitudes of the harmonics k = 0..n/2 of f of the response relative to the excitation
-    (x - y of the output DOF for base excitation, x for force excitation) over one period."""
-    ex = nlbeam.Harmonic(amplitude, f)
-    tr = nlbeam.integrate(model, ex, 1 / f, x0=state0, dt=1 / (f * n_samples), warn=False)
+    (x - y of the output DOF for base excitation, x for force excitation) over one period,
+    integrated with ``integrator`` (default Integrator()) at n_samples steps (or, adaptive,
+    samples) per period."""
+    integrator = integrator or Integrator()
+    tr = integrator.integrate(model, forcing(amplitude, f), 1 / f, period_step(f, n_samples),
+                              x0=state0)
     sig = tr.x[:-1, model.output_dof]
     if model.excitation_kind == "base":
         sig = sig - tr.y[:-1]
@@ -520,9 +501,10 @@ def _superharmonics(branches, model, integrator, orders=(2, 3), window=0.15, min
     """Superharmonic resonances of order k on the harmonic (order-1) branches: among the local
     maxima of xmax along a branch with k f within ``window`` (relative) of the main resonance
     (the frequency of the largest xmax), the one where the k-th harmonic of the relative
-    response is largest, if it is at least ``min_ratio`` of the first. The frequency is that of the branch point (tolerance: half
-    the distance to its neighbours) of the vertex of a parabola through the peak point and its
-    neighbours."""
+    response is largest, if it is at least ``min_ratio`` of the first. The frequency is that
+    of the branch point (tolerance: half the distance to its neighbours) of the vertex of a
+    parabola through the peak point and its neighbours. The harmonics are integrated with
+    ``integrator``."""
     out = []
     ones = [(bi, b) for bi, b in enumerate(branches) if b.order == 1 and len(b.xmax) >= 3]
     if not ones:
@@ -541,7 +523,8 @@ def _superharmonics(branches, model, integrator, orders=(2, 3), window=0.15, min
             if abs(k * f / f_res - 1) >= window:
                 continue
             b = branches[bi]
-            X = _harmonic_amplitudes(model, b.amplitude[i], f, b.state0[i])
+            X = _harmonic_amplitudes(model, b.amplitude[i], f, b.state0[i],
+                                     integrator=integrator)
             if X[k] >= min_ratio * X[1] and (best is None or X[k] > best[0]):
                 best = (X[k], float(X[k] / X[1]), bi, i)
         if best is not None:

@@ -1,20 +1,69 @@
-"""Pseudo-arclength continuation with bifurcation detection, over a small protocol.
-
-A problem offers ``evaluate(u, p, jac, jac_p) -> Evaluation(R, Ju, Jp, Ms, xmax)``,
-``scale_u`` (n,), ``scale_p``, ``multipliers(Ms)``, ``solve(u, p)`` and ``adapt(u, p)``
-(None, or a new problem and u after the unknowns were redefined, e.g. segment boundaries moved)
-with ``transfer(old_problem, u, p)``. Work is done in scaled variables (u / scale_u, p / scale_p).
+"""Pseudo-arclength continuation with bifurcation detection, over a small protocol
+(``Problem``: what the Tracer asks of a problem; continuation.shooting.ShootingProblem is one).
+Work is done in scaled variables (u / scale_u, p / scale_p).
 """
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from ._newton import ContinuationWarning, ConvergenceError
 
 KINDS = ("fold", "period-doubling", "neimark-sacker")  # from the test functions
+
+
+class Problem(Protocol):
+    """The problem R(u, p) = 0 (n equations, n unknowns u, one parameter p) a Tracer follows.
+
+    Required:
+    - ``scale_u`` (n,), ``scale_p``: the scales of the unknowns and of the parameter;
+    - ``evaluate(u, p, jac=True, jac_p=True)`` -> an evaluation with ``R`` (n,), ``Ju``
+      (dR/du (n, n) or None), ``Jp`` (dR/dp (n,) or None), ``Ms`` (what ``multipliers``
+      takes; empty without), ``xmax`` and ``n_impacts`` (an int that changes at a grazing
+      point); the Tracer sets ``B``, ``C`` and ``lazy_p`` on it;
+    - ``jacobian_p(u, p, ev=None)`` -> dR/dp (n,) (ev: the evaluation at (u, p), if any);
+    - ``multipliers(Ms)`` -> Floquet multipliers, largest modulus first;
+    - ``solve(u0, p, tol=...)`` -> (u, evaluation, residual, iterations) at fixed p, or
+      raises ConvergenceError;
+    - ``adapt(u, p)`` -> None, or (problem, u) after the unknowns were redefined (e.g. the
+      segment boundaries moved), with ``transfer(old_problem, u_old, p)`` -> u of the same
+      orbit in this problem's unknowns.
+
+    Optional (a problem class that subclasses Problem inherits these defaults):
+    - ``variational`` (default True): ``evaluate(jac=True)`` gives dR/du (from variational
+      equations). False: ``evaluate`` gives none, and the Tracer takes dR/du from
+      ``jacobian_u``, which such a problem must then provide;
+    - ``jacobian_u(u, p, ev=None)`` -> dR/du (n, n) by differences (default: raises);
+    - ``settle(u, p, p_new, efolds)`` -> u at p_new of the attractor reached from the orbit u
+      at p (the second way past a non-smooth point in ``Tracer.jump``; default: raises
+      ConvergenceError, so that way is skipped).
+    """
+
+    scale_u: np.ndarray
+    scale_p: float
+    variational: bool = True
+
+    def evaluate(self, u, p, jac=True, jac_p=True): ...
+
+    def jacobian_p(self, u, p, ev=None): ...
+
+    def multipliers(self, Ms): ...
+
+    def solve(self, u0, p, tol=1e-10): ...
+
+    def adapt(self, u, p): ...
+
+    def transfer(self, old, u_old, p): ...
+
+    def jacobian_u(self, u, p, ev=None):
+        raise NotImplementedError(f"jacobian_u: {type(self).__name__} has variational = False "
+                                  "and must give dR/du")
+
+    def settle(self, u, p, p_new, efolds=8.0):
+        raise ConvergenceError(f"settle: not offered by {type(self).__name__}")
 
 
 @dataclass
@@ -69,14 +118,16 @@ def tangent(J, t_prev):
 
 
 class Tracer:
-    """Follows one branch. Options: p_min, p_max (stop outside), ds (initial step, scaled),
-    ds_min, ds_max, max_angle (rad, between successive tangents), max_points, tol (corrector,
-    scaled residual; where the iteration stagnates below noise_tol, as where contacts nearly
-    stick and the fixed-step map has noise of 1e-8..1e-7, the better iterate is accepted), bif_tol (relative width in p of the bracket of a located bifurcation),
+    """Follows one branch of a ``Problem``. Options: p_min, p_max (stop outside), ds (initial
+    step, scaled), ds_min, ds_max, max_angle (rad, between successive tangents), max_points,
+    tol (corrector, scaled residual; where the iteration stagnates below noise_tol, as where
+    contacts nearly stick and the fixed-step map has noise of 1e-8..1e-7, the better iterate
+    is accepted), bif_tol (relative width in p of the bracket of a located bifurcation),
     detect (bool), grazing_ds (longest step, scaled, that may change the number of impacts per
-    period: longer ones are halved), progress_points / progress_min (the no-progress rule: a branch whose last
-    ``progress_points`` points together advance less than ``progress_min`` in scaled arclength
-    is stopped with a ContinuationWarning), label (names the branch in that warning).
+    period: longer ones are halved), progress_points / progress_min (the no-progress rule: a
+    branch whose last ``progress_points`` points together advance less than ``progress_min``
+    in scaled arclength is stopped with a ContinuationWarning), label (names the branch in
+    that warning).
 
     The corrector is a quasi-Newton iteration on the bordered system: the Jacobian at the
     predictor is dR/du from the variational equations (or, for a problem without them, the
@@ -121,7 +172,7 @@ class Tracer:
         w = prob.scale_u
         n = len(w)
         B = np.zeros((n, n + 1))
-        if ev.Ju is not None and getattr(prob, "variational", True):
+        if ev.Ju is not None and prob.variational:
             B[:, :n] = ev.Ju * w[None, :] / w[:, None]
         return B
 
@@ -133,7 +184,7 @@ class Tracer:
         w, wp = prob.scale_u, prob.scale_p
         n = len(w)
         C = np.zeros((n, n + 1))
-        if not getattr(prob, "variational", True):
+        if not prob.variational:
             # forward differences at every corrector start: Broyden updates alone, carried from
             # point to point, drift (spurious folds, creeping); n flows without variational
             # equations cost about what the variational equations would
@@ -178,13 +229,14 @@ class Tracer:
         its forward difference is left out (a flow saved); ``complete_jacobian`` fills it in
         when a tangent is wanted."""
         w, wp = prob.scale_u, prob.scale_p
-        var = getattr(prob, "variational", True)
+        var = prob.variational
         z = zeta_pred.copy()
         C = None
         dz = None
         dz_norm = np.inf
         res_prev = np.inf
         r_prev = None
+        z_prev = ev_prev = None  # the previous iterate and its evaluation
         self.impacts_seen = set()
         for it in range(1, self.max_iter + 1):
             try:
@@ -262,9 +314,9 @@ class Tracer:
         secant through the last two points (the Jacobian's tangent at the first), and the step
         adapts to the angle between successive secants (target ``max_angle / 2``; the secant
         measures the branch's curvature even where the Jacobian is only approximate) and to
-        the corrector's iterations. Where the number of impacts per period changes between two points (a
-        grazing orbit in between: the flow map has a square-root singularity there), the
-        grazing point is bracketed; where the corrector fails repeatedly, the branch is
+        the corrector's iterations. Where the number of impacts per period changes between two
+        points (a grazing orbit in between: the flow map has a square-root singularity there),
+        the grazing point is bracketed; where the corrector fails repeatedly, the branch is
         continued by a natural-parameter step beyond the failure (``jump``) when the failed
         corrector's iterates changed the number of impacts (a grazing point ahead).
         A branch that makes no progress (see the class doc) stops with a ContinuationWarning.
@@ -398,9 +450,10 @@ class Tracer:
             if (len(steps) >= self.progress_points
                     and sum(steps[-self.progress_points:]) < self.progress_min):
                 reason = "no progress"
+                advanced = sum(steps[-self.progress_points:])
                 warnings.warn(
                     f"continuation: the {self.label} made no progress near {pt.p:.9g} (its last "
-                    f"{self.progress_points} points advanced {sum(steps[-self.progress_points:]):.1e}"
+                    f"{self.progress_points} points advanced {advanced:.1e}"
                     f" < {self.progress_min:.0e} in scaled arclength) and is stopped there. The "
                     "flow map is probably not smooth there (grazing or chattering contacts, or "
                     "an orbit too unstable for single shooting): try finer integration "
@@ -476,17 +529,16 @@ class Tracer:
                     return accept(zs, evs)
                 same = (zs, evs)
                 break
-        if hasattr(prob, "settle"):
-            p_new = (z[-1] + sp * self.jump_steps[-1]) * wp
-            try:
-                u = prob.settle(pt.u, pt.p, p_new, efolds=4.0)
-                zs, evs = solve_at(u, p_new)
-                if (evs.n_impacts != pt.n_impacts
-                        and abs(evs.xmax - pt.xmax) < 0.1 * abs(pt.xmax)
-                        and np.max(np.abs(zs[:-1] - z[:-1])) < 10 * self.jump_max_distance):
-                    return accept(zs, evs)
-            except ConvergenceError:
-                pass
+        p_new = (z[-1] + sp * self.jump_steps[-1]) * wp
+        try:
+            u = prob.settle(pt.u, pt.p, p_new, efolds=4.0)
+            zs, evs = solve_at(u, p_new)
+            if (evs.n_impacts != pt.n_impacts
+                    and abs(evs.xmax - pt.xmax) < 0.1 * abs(pt.xmax)
+                    and np.max(np.abs(zs[:-1] - z[:-1])) < 10 * self.jump_max_distance):
+                return accept(zs, evs)
+        except ConvergenceError:
+            pass
         if same is not None and self._creeps < 3:
             self._creeps += 1
             return accept(*same)
@@ -499,7 +551,7 @@ class Tracer:
         best, lo_p, hi_p = pb, pa.p, pb.p
         if jumped:
             w, wp = prob.scale_u, prob.scale_p
-            u_lo, u_hi = pa.u, pb.u
+            u_lo = pa.u
             for _ in range(self.grazing_iter):
                 pm = 0.5 * (lo_p + hi_p)
                 e_p = np.zeros(len(u_lo) + 1)
@@ -515,7 +567,7 @@ class Tracer:
                 if q.n_impacts == pa.n_impacts:
                     lo_p, u_lo = pm, u
                 else:
-                    hi_p, u_hi, best = pm, u, q
+                    hi_p, best = pm, q
             return best, abs(best.p - lo_p)  # the reported point to the near side
         lo, hi = 0.0, ds
         for _ in range(self.grazing_iter):
@@ -590,7 +642,7 @@ class Tracer:
                 s = 0.5 * (lo + hi)
             try:
                 zs, evs, _ = self.correct(prob, z_a + s * t_a, t_a, C_a)
-                if not getattr(prob, "variational", True):
+                if not prob.variational:
                     # the fold's test function is the tangent's p-component: from the Jacobian
                     # at the solution itself (the corrector's is the predictor's, updated), or
                     # the fold moves by ~1e-5

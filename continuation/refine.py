@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._newton import ConvergenceError, newton
+from ._newton import ConvergenceError
 from .shooting import Integrator, _problem_from_state
 
 # graded RK4, free-flight step and contact step halved together: the located frequencies

@@ -12,6 +12,7 @@ the solution is reported at t = 0 by integrating from b_0.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import warnings
 from dataclasses import dataclass
@@ -20,11 +21,18 @@ import numpy as np
 
 import nlbeam
 from nlbeam.integrate import FlowMap
+from nlbeam._validate import choice
+from nlbeam.solver import Solver, period_step, phase_step
+from nlbeam.vocabulary import METHODS as METHOD_NAMES
 
 from ._newton import ConvergenceError, ContinuationWarning, newton
+from .pathfollow import Problem
 
-# steps per excitation period of the fixed-step methods at the nlbeam default dt (f >= f_n)
-_BASE_STEPS = {"rk2": 400, "rk4": 100}
+
+def forcing(amplitude, frequency):
+    """The excitation of the periodic orbits: y = amplitude cos(2 pi frequency t) (m or N,
+    Hz), phase zero at t = 0."""
+    return nlbeam.Harmonic(amplitude, frequency)
 
 
 @dataclass(frozen=True)
@@ -32,7 +40,8 @@ class Integrator:
     """How orbits are integrated. method: 'rk4', 'rk2' or 'adaptive' (rtol, atol).
     dt_scale: the fixed step as a fraction of nlbeam's default (1: default; 0.5: half the step).
     The number of steps per excitation period is kept fixed in steps of powers of two, so the
-    discrete flow map is smooth along a branch. steps_per_contact: as in nlbeam.flow."""
+    discrete flow map is smooth along a branch. steps_per_contact: as in nlbeam.flow. The step
+    decisions are those of ``solver`` (nlbeam.solver.Solver)."""
 
     method: str = "rk4"
     dt_scale: float = 1.0
@@ -41,25 +50,37 @@ class Integrator:
     atol: float = 1e-14
 
     def __post_init__(self):
-        if self.method not in ("rk4", "rk2", "adaptive"):
-            raise ValueError(f"method: must be 'rk4', 'rk2' or 'adaptive', got {self.method!r}")
+        choice("method", self.method, METHOD_NAMES)
         if not (math.isfinite(self.dt_scale) and self.dt_scale > 0):
             raise ValueError(f"dt_scale: must be finite and > 0, got {self.dt_scale!r}")
+        _ = self.solver  # a Solver checks steps_per_contact, rtol, atol
+
+    @functools.cached_property
+    def solver(self):
+        """The Solver of these settings (its dt is chosen per flow from the frequency)."""
+        return Solver(self.method, None, self.steps_per_contact, self.rtol, self.atol)
 
     def steps_per_period(self, model, frequency):
-        """Steps per excitation period at frequency (Hz) for fixed-step methods (0: adaptive)."""
-        if self.method == "adaptive":
-            return 0
-        fn = float(np.max(model.natural_frequencies()))
-        ratio = max(1.0, fn / frequency)
-        level = 2 ** int(math.ceil(math.log2(ratio) - 1e-12))
-        return int(math.ceil(_BASE_STEPS[self.method] * level / self.dt_scale))
+        """Steps per excitation period at frequency (Hz) for fixed-step methods (0: adaptive);
+        Solver.steps_per_excitation_period."""
+        return self.solver.steps_per_excitation_period(model, frequency, self.dt_scale)
 
+    def flow_map(self, model, ex, steps_per_period):
+        """An nlbeam FlowMap of model under the harmonic excitation ex with these settings and
+        steps_per_period fixed steps per excitation period (0: adaptive), without the warning
+        about few steps per contact (a Newton iterate may be far from any orbit)."""
+        return FlowMap(model, ex, method=self.method,
+                       dt=period_step(ex.frequency, steps_per_period),
+                       steps_per_contact=self.steps_per_contact, rtol=self.rtol, atol=self.atol,
+                       warn=False)
 
-def ex_period_dt(ex, steps_per_period):
-    """The fixed step (s) of steps_per_period steps per period of the harmonic excitation ex
-    (None: the integrator's default, for the adaptive method)."""
-    return 1.0 / (ex.frequency * steps_per_period) if steps_per_period else None
+    def integrate(self, model, ex, t_end, dt, **kw):
+        """nlbeam.integrate of model under ex to t_end (s) with these settings and step (or,
+        adaptive, output spacing) dt (s), without the warning about few steps per contact;
+        kw: x0, t0, disc0, store_every."""
+        return nlbeam.integrate(model, ex, t_end, method=self.method, dt=dt,
+                                steps_per_contact=self.steps_per_contact, rtol=self.rtol,
+                                atol=self.atol, warn=False, **kw)
 
 
 def event_elements(model):
@@ -86,14 +107,14 @@ def clearance(model, states, y):
     return -np.max(d, axis=1)
 
 
-class ShootingProblem:
+class ShootingProblem(Problem):
     """The periodic-orbit problem R(u, p) = 0 of one model, excitation amplitude and order.
 
     parameter: 'frequency' (Hz), 'amplitude' (m or N), or the name of a model field
     (dataclasses.replace is used: 'e', 'K_hertz', ...). ``fixed`` holds the values of the other
     two of (frequency, amplitude). boundaries: excitation phases of the segment starts.
-    Protocol used by the path follower: ``evaluate``, ``n``, ``scale_u``, ``scale_p``,
-    ``multipliers``, ``xmax``, ``adapt``.
+    The path follower's protocol (continuation.pathfollow.Problem), with its optional
+    ``variational``, ``jacobian_u`` and ``settle``.
     """
 
     def __init__(self, model, amplitude, frequency, order, boundaries, integrator,
@@ -145,18 +166,17 @@ class ShootingProblem:
         return m, self.amplitude, self.frequency
 
     # --- segments -----------------------------------------------------------------------------
-    def _segments(self, f):
+    def forcing(self, p):
+        """(model, excitation) at parameter value p."""
+        model, A, f = self.setup(p)
+        return model, forcing(A, f)
+
+    # --- segments -----------------------------------------------------------------------------
+    def _segments(self):
+        """(j, phase at its start, its length in excitation periods) of each segment."""
         b = np.append(self.boundaries, self.boundaries[0] + self.order)
         for j in range(self.n_seg):
-            dphi = b[j + 1] - b[j]
-            t0 = b[j] / f
-            dur = dphi / f
-            if self.steps_per_period:
-                nsteps = max(1, int(round(self.steps_per_period * dphi)))
-                dt = dur / nsteps
-            else:
-                dt = dur
-            yield j, t0, dur, dt
+            yield j, b[j], b[j + 1] - b[j]
 
     def _flowmap(self, model, ex):
         """A FlowMap (nlbeam.integrate.FlowMap: nlbeam.flow without its per-call checks) of
@@ -164,20 +184,36 @@ class ShootingProblem:
         ex when only the excitation changed."""
         fm = self._fm
         if fm is None or fm.model is not model:
-            it = self.integrator
-            fm = FlowMap(model, ex, method=it.method, dt=ex_period_dt(ex, self.steps_per_period),
-                         steps_per_contact=it.steps_per_contact, rtol=it.rtol, atol=it.atol)
-            self._fm = fm
+            fm = self._fm = self.integrator.flow_map(model, ex, self.steps_per_period)
             return fm
         if fm.excitation == ex:
             return fm
         self._fm = fm = fm.retarget(ex)
         return fm
 
-    def _flow(self, model, ex, s, t0, dur, dt, mono):
+    def flow_phases(self, model, ex, state, phase0, dphi, *, disc0=None, monodromy=False,
+                    span_step=True, newton=False):
+        """The nlbeam.Flow of ``state`` (2N,) from excitation phase ``phase0`` over ``dphi``
+        excitation periods of ex (a harmonic excitation), with this problem's integrator:
+        steps_per_period fixed steps per period, rounded to a whole number over dphi
+        (Solver's phase_step). For the adaptive method the step argument (output spacing) is
+        the whole span with ``span_step`` (as the shooting segments), else the Solver's
+        default. disc0: the contact state at the start (None: the start-in-contact rule).
+        Raises nlbeam.IntegrationError; with ``newton`` (the flows of Newton's residual) at
+        most 50 times the nominal steps + 20000, and a failed integration is a failed Newton
+        step (ConvergenceError)."""
+        f = ex.frequency
+        dur = dphi / f
+        if self.steps_per_period or span_step:
+            dt = phase_step(dur, self.steps_per_period * dphi)
+        else:
+            dt = self.integrator.solver.default_dt(model, ex)
+        fm = self._flowmap(model, ex)
+        if not newton:
+            return fm(state, phase0 / f, dur, monodromy=monodromy, disc0=disc0, dt=dt)
         try:
-            return self._flowmap(model, ex)(s, t0, dur, monodromy=mono, dt=dt,
-                                            max_steps=int(50 * dur / dt) + 20000)
+            return fm(state, phase0 / f, dur, monodromy=monodromy, disc0=disc0, dt=dt,
+                      max_steps=int(50 * dur / dt) + 20000)
         except nlbeam.IntegrationError as exc:
             # an iterate far from any orbit (e.g. a huge penetration): a failed Newton step
             raise ConvergenceError(f"shooting: integration failed ({exc}); try a smaller step, "
@@ -190,18 +226,16 @@ class ShootingProblem:
         mono: the segment monodromies from the variational equations, or (for a problem with
         ``variational = False``) dR/du by forward differences; [] without."""
         try:
-            model, A, f = self.setup(p)
-            ex = nlbeam.Harmonic(A, f)
+            model, ex = self.forcing(p)
         except ValueError as exc:  # the predictor left the parameter's domain
             raise ConvergenceError(f"shooting: {exc}") from None
         ends = np.empty_like(U)
         Ms = []
         xm = 0.0
         n_imp = 0
-        N = model.n_dof
         var = mono and self.variational
-        for j, t0, dur, dt in self._segments(f):
-            fl = self._flow(model, ex, U[j], t0, dur, dt, var)
+        for j, phase0, dphi in self._segments():
+            fl = self.flow_phases(model, ex, U[j], phase0, dphi, monodromy=var, newton=True)
             ends[j] = fl.state
             n_imp += fl.n_impacts
             xm = max(xm, float(fl.xmax[self.out]))
@@ -209,10 +243,8 @@ class ShootingProblem:
                 M = fl.monodromy
                 if fl.dstate_dvminus0 is not None:
                     # started inside a contact: the memory was taken as the penetration rate
-                    # at the start (nlbeam's rule), a function of the state: chain it in
-                    D = np.zeros((model.n_elements, self.N2))
-                    D[:, N:] = model.element_geometry()[1]
-                    M = M + fl.dstate_dvminus0 @ D
+                    # at the start (the solver's rule), a function of the state: chain it in
+                    M = M + fl.dstate_dvminus0 @ Solver.start_contact_derivative(model)
                 Ms.append(M)
             elif mono:
                 # forward differences of the segment's flow (relative step 1e-7 of the scale)
@@ -222,8 +254,8 @@ class ShootingProblem:
                     h = 1e-7 * sc[j * self.N2 + k]
                     s1 = U[j].copy()
                     s1[k] += h
-                    M[:, k] = (self._flow(model, ex, s1, t0, dur, dt, False).state
-                               - fl.state) / h
+                    M[:, k] = (self.flow_phases(model, ex, s1, phase0, dphi,
+                                                newton=True).state - fl.state) / h
                 Ms.append(M)
         self.last_impacts = n_imp
         return ends, Ms, xm
@@ -286,9 +318,9 @@ class ShootingProblem:
         return mu[np.argsort(-np.abs(mu), kind="stable")]
 
     def boundary_clearance(self, u, p):
-        model, A, f = self.setup(p)
+        model, ex = self.forcing(p)
         U = np.asarray(u).reshape(self.n_seg, self.N2)
-        y = nlbeam.Harmonic(A, f).evaluate(self.boundaries / f)[0]
+        y = ex.evaluate(self.boundaries / ex.frequency)[0]
         return clearance(model, U, y)
 
     def make_scale(self, u, p):
@@ -326,19 +358,14 @@ class ShootingProblem:
         """The smallest k dividing the order such that the orbit u repeats after k excitation
         periods (to ``tol`` in units of the scales): the order it really has."""
         n = self.order
-        model, A, f = self.setup(p)
+        model, ex = self.forcing(p)
         U = np.asarray(u).reshape(self.n_seg, self.N2)
         w = self.scale_u[:self.N2] if self.scale_u is not None else \
             self.make_scale(u, p)[:self.N2]
-        it = self.integrator
         for k in range(1, n):
             if n % k:
                 continue
-            fl = nlbeam.flow(model, nlbeam.Harmonic(A, f), U[0], self.boundaries[0] / f, k / f,
-                             method=it.method, rtol=it.rtol, atol=it.atol,
-                             steps_per_contact=it.steps_per_contact,
-                             dt=1.0 / (f * self.steps_per_period) if self.steps_per_period
-                             else None, warn=False)
+            fl = self.flow_phases(model, ex, U[0], self.boundaries[0], k, span_step=False)
             if np.max(np.abs(fl.state - U[0]) / w) < tol:
                 return k
         return n
@@ -348,19 +375,16 @@ class ShootingProblem:
         """Integrate one period from the first boundary, storing samples (nlbeam.Trajectory).
         disc0: the contact state there if the boundary lies inside a contact (the
         Lankarani-Nikravesh memory; None: nlbeam's start-in-contact rule)."""
-        model, A, f = self.setup(p)
-        ex = nlbeam.Harmonic(A, f)
+        model, ex = self.forcing(p)
+        f = ex.frequency
         U = np.asarray(u).reshape(self.n_seg, self.N2)
         t0 = self.boundaries[0] / f
         T = self.order / f
-        it = self.integrator
         if self.steps_per_period:
-            dt = 1.0 / (f * self.steps_per_period)
-        else:
+            dt = period_step(f, self.steps_per_period)
+        else:  # adaptive: the output spacing
             dt = T / (n_samples or 400 * self.order)
-        return nlbeam.integrate(model, ex, t0 + T, method=it.method, dt=dt, x0=U[0], t0=t0,
-                                disc0=disc0, steps_per_contact=it.steps_per_contact,
-                                rtol=it.rtol, atol=it.atol, warn=False)
+        return self.integrator.integrate(model, ex, t0 + T, dt, x0=U[0], t0=t0, disc0=disc0)
 
     def rephased(self, u, p, n_seg=None, steps_per_period=None, disc0=None):
         """A problem with boundaries moved into free flight (as far from the stops as possible,
@@ -440,12 +464,10 @@ class ShootingProblem:
 
     def transfer(self, old, u_old, p):
         """The states at this problem's boundaries of the orbit u_old of problem ``old`` at p."""
-        model, A, f = old.setup(p)
-        ex = nlbeam.Harmonic(A, f)
+        model, ex = old.forcing(p)
         U = np.asarray(u_old).reshape(old.n_seg, old.N2)
         b = old.boundaries
         out = np.empty((self.n_seg, self.N2))
-        it = old.integrator
         for i, phi in enumerate(self.boundaries):
             ph = b[0] + (phi - b[0]) % old.order
             j = int(np.searchsorted(b, ph, side="right") - 1)
@@ -453,16 +475,12 @@ class ShootingProblem:
             if dphi < 1e-12:
                 out[i] = U[j]
                 continue
-            dt = (dphi / f) / max(1, int(round(old.steps_per_period * dphi))) \
-                if old.steps_per_period else dphi / f
-            out[i] = nlbeam.flow(model, ex, U[j], b[j] / f, dphi / f, method=it.method, dt=dt,
-                                 steps_per_contact=it.steps_per_contact, rtol=it.rtol,
-                                 atol=it.atol, warn=False).state
+            out[i] = old.flow_phases(model, ex, U[j], b[j], dphi).state
         return out.ravel()
 
     def state_at_zero(self, u, p):
         """(state, disc) at t = 0 (excitation phase zero) of the orbit u."""
-        model, A, f = self.setup(p)
+        model, ex = self.forcing(p)
         U = np.asarray(u).reshape(self.n_seg, self.N2)
         b = np.append(self.boundaries, self.boundaries[0] + self.order)
         target = float(self.order)
@@ -470,14 +488,7 @@ class ShootingProblem:
             if abs(b[j] - target) < 1e-13 * self.order or abs(b[j]) < 1e-13 * self.order:
                 return U[j].copy(), None
             if b[j] <= target < b[j + 1]:
-                fl = None
-                dphi = target - b[j]
-                it = self.integrator
-                dt = (dphi / f) / max(1, int(round(self.steps_per_period * dphi))) \
-                    if self.steps_per_period else dphi / f
-                fl = nlbeam.flow(model, nlbeam.Harmonic(A, f), U[j], b[j] / f, dphi / f,
-                                 method=it.method, dt=dt, steps_per_contact=it.steps_per_contact,
-                                 rtol=it.rtol, atol=it.atol, warn=False)
+                fl = self.flow_phases(model, ex, U[j], b[j], target - b[j])
                 return fl.state, fl.disc
         return U[0].copy(), None
 
@@ -542,12 +553,10 @@ def steady_state(model, amplitude, frequency, *, x0=None, efolds=8.0, min_period
     (about ``efolds`` decay times of the linear structure). Returns the state at the end, at
     excitation phase zero."""
     n = int(min(max_periods, max(min_periods, math.ceil(efolds / decay_rate(model) * frequency))))
-    spp = integrator.steps_per_period(model, frequency)
-    dt = 1.0 / (frequency * spp) if spp else 1.0 / frequency
-    tr = nlbeam.integrate(model, nlbeam.Harmonic(amplitude, frequency), n / frequency,
-                          method=integrator.method, dt=dt, x0=x0, store_every=0,
-                          steps_per_contact=integrator.steps_per_contact,
-                          rtol=integrator.rtol, atol=integrator.atol, warn=False)
+    # adaptive (0 steps per period): the output spacing is one period
+    dt = period_step(frequency, integrator.steps_per_period(model, frequency) or 1)
+    tr = integrator.integrate(model, forcing(amplitude, frequency), n / frequency, dt, x0=x0,
+                              store_every=0)
     return tr.state_end
 
 

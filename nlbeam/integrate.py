@@ -4,28 +4,17 @@ from __future__ import annotations
 
 import copy
 import math
-import warnings
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import _kernels as _k
-from ._validate import choice, finite, positive
+from ._validate import finite, positive
 from .excitation import Excitation
+from .solver import METHODS, MIN_STEPS_PER_CONTACT, Solver, warn_few_contact_steps
 
-METHODS = {"rk2": _k.RK2, "rk4": _k.RK4, "adaptive": _k.DP5}
-
-# defaults: steps per period of the fastest of (excitation, linear natural frequency), and
-# steps per contact. Accuracy they give on the paper model is stated in the README.
-_STEPS_PER_PERIOD = {"rk2": 400, "rk4": 100, "adaptive": 32}
-_STEPS_PER_CONTACT = {"rk2": 96, "rk4": 32, "adaptive": 32}
-MIN_STEPS_PER_CONTACT = 8
-# |omega dt| of the highest undamped mode beyond which the explicit step amplifies it: RK4 2 sqrt 2
-# (imaginary axis); Heun grows an undamped mode by ~(omega dt)^4 / 8 per step at any dt, its
-# real-axis limit 2 is taken. The defaults stay far below (omega dt = 2 pi / steps per period).
-_STABILITY = {"rk2": 2.0, "rk4": 2.0 * math.sqrt(2.0)}
-_F_MAX = weakref.WeakKeyDictionary()
+__all__ = ["integrate", "flow", "FlowMap", "Trajectory", "Flow", "IntegrationError",
+           "default_dt", "METHODS", "MIN_STEPS_PER_CONTACT"]
 
 
 class IntegrationError(RuntimeError):
@@ -52,9 +41,8 @@ def _status_message(status, t, method):
 def default_dt(model, excitation, method="rk4"):
     """Default step (s): a fixed fraction of the shortest period among the excitation's highest
     frequency and the linear structure's highest natural frequency (for 'adaptive', the spacing
-    of the output samples)."""
-    f = max(excitation.max_frequency(), float(np.max(model.system.natural_frequencies())), 1e-9)
-    return 1.0 / (_STEPS_PER_PERIOD[method] * f)
+    of the output samples). Solver.default_dt."""
+    return Solver(method).default_dt(model, excitation)
 
 
 @dataclass
@@ -121,71 +109,56 @@ class Flow:
     min_steps_per_contact: int = -1
 
 
-def _check_stable_step(model, excitation, method, dt):
-    """Raise when a fixed step dt (s) is beyond the explicit method's stability limit for the
-    highest natural frequency of the model (a stiff high mode of a multi-mode model)."""
-    sysm = model.system
-    fmax = _F_MAX.get(sysm)
-    if fmax is None:
-        fmax = _F_MAX[sysm] = float(np.max(sysm.natural_frequencies()))
-    if 2 * math.pi * fmax * dt > _STABILITY[method]:
-        lim = _STABILITY[method] / (2 * math.pi * fmax)
-        raise ValueError(f"dt: {dt:.4g} s is beyond the stability limit {lim:.4g} s of {method!r} "
-                         f"for the model's highest natural frequency {fmax:.6g} Hz; use a smaller "
-                         f"dt or dt=None (default {default_dt(model, excitation, method):.4g} s)")
-
-
-def _prepare(model, excitation, method, dt, steps_per_contact, t0, t_end):
-    if not hasattr(model, "kernel_arrays"):
-        raise ValueError("model: must be an nlbeam model (BeamImpact, Duffing, System, ...)")
-    if not isinstance(excitation, Excitation):
-        raise ValueError("excitation: must be an nlbeam.Excitation (Harmonic, Sampled, ...)")
-    choice("method", method, tuple(METHODS))
-    finite("t0", t0)
-    finite("t_end", t_end)
-    if not t_end > t0:
-        raise ValueError(f"t_end: must be > t0 = {t0!r} s, got {t_end!r}")
-    if dt is None:
-        dt = default_dt(model, excitation, method)
-    positive("dt", dt, unit="s")
-    if method in _STABILITY:
-        _check_stable_step(model, excitation, method, dt)
-    if steps_per_contact is None:
-        steps_per_contact = _STEPS_PER_CONTACT[method]
-    positive("steps_per_contact", steps_per_contact)
-    lo, hi = excitation.time_span()
+def _check_span(span, t0, t_end):
+    """Raise unless [t0, t_end] (s) lies inside the excitation's span (lo, hi) (s)."""
+    lo, hi = span
     tol = 1e-9 * max(abs(t0), abs(t_end), 1.0)
     if t0 < lo - tol or t_end > hi + tol:
         raise ValueError(f"t_end: the span [{t0}, {t_end}] s must lie inside the excitation's "
                          f"span [{lo}, {hi}] s")
-    return float(dt), float(steps_per_contact)
+
+
+def _check_model(model, excitation):
+    if not hasattr(model, "kernel_arrays"):
+        raise ValueError("model: must be an nlbeam model (BeamImpact, Duffing, System, ...)")
+    if not isinstance(excitation, Excitation):
+        raise ValueError("excitation: must be an nlbeam.Excitation (Harmonic, Sampled, ...)")
+
+
+def _prepare(model, excitation, solver, t0, t_end):
+    """Check the arguments of one integration from t0 to t_end (s) with ``solver``; returns
+    (dt (s), steps per contact)."""
+    _check_model(model, excitation)
+    finite("t0", t0)
+    finite("t_end", t_end)
+    if not t_end > t0:
+        raise ValueError(f"t_end: must be > t0 = {t0!r} s, got {t_end!r}")
+    dt = solver.step(model, excitation)
+    _check_span(excitation.time_span(), t0, t_end)
+    return dt, solver.contact_steps()
+
+
+def _state(model, state, name):
+    """The initial state as a float array (2N,), checked (name: the argument's name)."""
+    N = model.n_dof
+    if state is None:
+        return np.zeros(2 * N)
+    s0 = np.array(state, dtype=float).ravel()
+    if s0.shape != (2 * N,) or not np.all(np.isfinite(s0)):
+        raise ValueError(f"{name}: must be a finite state [x_1..x_N, v_1..v_N] of length {2 * N}")
+    return s0
 
 
 def _initial(model, x0, disc0, t0, excitation):
-    N = model.n_dof
-    ne = model.n_elements
-    if x0 is None:
-        s0 = np.zeros(2 * N)
-    else:
-        s0 = np.array(x0, dtype=float).ravel()
-        if s0.shape != (2 * N,) or not np.all(np.isfinite(s0)):
-            raise ValueError(f"x0: must be a finite state [x_1..x_N, v_1..v_N] of length {2 * N}")
+    """(state (2N,), contact state (n_elements, 2)) at t0: disc0, or the solver's
+    start-in-contact rule (Solver.start_contact)."""
+    s0 = _state(model, x0, "x0")
     if disc0 is None:
-        disc = np.zeros((ne, 2))
-        # a record that starts inside contact takes the penetration rate at the start as
-        # delta'_minus when it is positive (else VMINUS_FLOOR = 1e-6 m/s, the floor the kernel
-        # also applies to a tangential onset)
-        et, w, wy, gap = model.element_geometry()
         y, yd = excitation.evaluate([t0])
-        for e in range(ne):
-            if _k.has_event(et[e]):
-                d = w[e] @ s0[:N] + wy[e] * y[0] - gap[e]
-                dd = w[e] @ s0[N:] + wy[e] * yd[0]
-                if d > 0:
-                    disc[e, 0] = 1.0
-                    disc[e, 1] = dd if dd > _k.VMINUS_FLOOR else _k.VMINUS_FLOOR
+        disc = Solver.start_contact(model.element_geometry(), s0, y[0], yd[0],
+                                    Solver.event_elements(model))
     else:
-        disc = np.array(disc0, dtype=float).reshape(ne, 2)
+        disc = np.array(disc0, dtype=float).reshape(model.n_elements, 2)
     return s0, disc
 
 
@@ -196,7 +169,7 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
     xc, xp, xtab = excitation.kernel_args()
     N = model.n_dof
     ne = model.n_elements
-    n_grid = int(math.ceil((t_end - t0) / dt - 1e-9))
+    n_grid = Solver.grid_size(t_end - t0, dt)
     if store_every > 0:
         n_out = n_grid // store_every + 2
     else:
@@ -213,7 +186,7 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
     counters = np.zeros(8, dtype=np.int64)
     fcounters = np.zeros(2)
     ev_log = np.zeros((int(event_log), 4))
-    h_init = min(dt, 1e-3 / max(excitation.max_frequency(), 1.0))
+    h_init = min(dt, Solver.first_step_cap(excitation))
     status = model.kernels().integrate_kernel(sysa, xc, xp, xtab, METHODS[method], float(t0), float(t_end),
                                  dt, spc, float(rtol), float(atol), h_init, int(max_steps),
                                  s0, disc, bool(events), bool(want_var), P0, dvm0,
@@ -222,10 +195,8 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
     if status != 0:
         raise IntegrationError(_status_message(status, fcounters[0], method))
     n = counters[0]
-    if warn and counters[6] > 0 and method != "adaptive" and counters[5] < MIN_STEPS_PER_CONTACT:
-        warnings.warn(f"a contact was resolved with only {counters[5]} steps (< "
-                      f"{MIN_STEPS_PER_CONTACT}): the result is inaccurate; reduce dt or raise "
-                      "steps_per_contact", RuntimeWarning, stacklevel=3)
+    if warn:
+        warn_few_contact_steps(method, counters[5], counters[6], stacklevel=3)
     ev_log = ev_log[:min(int(counters[7]), ev_log.shape[0])]
     return (out_t[:n], out_s[:n], out_d[:n], out_f[:n], s_end, disc_end, P_end, dvm_end,
             xmax, counters, fcounters, ev_log)
@@ -243,17 +214,16 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
     stepped onto; no step crosses a contact boundary (``events=False`` switches this off, for
     comparison only). With ``graded`` (default) the fixed-step methods step the start of each
     contact uniformly in sqrt(t - t_onset) and its end uniformly in sqrt(delta), which keeps
-    their order across the delta^1.5 singularity of Hertz-type contact forces. x0: initial state [x_1..x_N, v_1..v_N] (default: at rest).
+    their order across the delta^1.5 singularity of Hertz-type contact forces.
+    x0: initial state [x_1..x_N, v_1..v_N] (default: at rest).
     store_every: keep every k-th grid sample (0: none, only the end state).
     event_log: how many contact events to record in ``Trajectory.events`` (memory bound).
     warn: warn when a contact got fewer than 8 steps (``Trajectory.min_steps_per_contact`` tells
     in any case).
     Returns a :class:`Trajectory`.
     """
-    dt, spc = _prepare(model, excitation, method, dt, steps_per_contact, t0, t_end)
-    if method == "adaptive":
-        positive("rtol", rtol)
-        positive("atol", atol)
+    solver = Solver(method, dt, steps_per_contact, rtol, atol, events, graded)
+    dt, spc = _prepare(model, excitation, solver, t0, t_end)
     if int(store_every) < 0:
         raise ValueError(f"store_every: must be an integer >= 0, got {store_every!r}")
     s0, disc = _initial(model, x0, disc0, t0, excitation)
@@ -281,23 +251,15 @@ def flow(model, excitation, state0, t0, duration, *, monodromy=False, disc0=None
     Runge-Kutta stages (the exact derivative of the fixed-step map between events), and the
     Lankarani-Nikravesh onset velocity carries its own sensitivity row, updated at every onset.
     For a fixed-step method, dt is adjusted down so that duration / dt is an integer.
+    warn: warn when a contact got fewer than 8 steps (fixed-step methods). One call of a
+    ``FlowMap``; the step decisions are those of nlbeam.solver.Solver.
     """
+    finite("t0", t0)
     finite("duration", duration)
-    if not duration > 0:
-        raise ValueError(f"duration: must be > 0 s, got {duration!r}")
-    t_end = t0 + duration
-    dt, spc = _prepare(model, excitation, method, dt, steps_per_contact, t0, t_end)
-    if method != "adaptive":
-        dt = duration / math.ceil(duration / dt - 1e-9)
-    s0, disc = _initial(model, state0, disc0, t0, excitation)
-    N = model.n_dof
-    ne = model.n_elements
-    in_contact = bool(np.any(disc[:, 0] != 0))
-    P0, dvm0 = _sensitivity_seed(N, ne, in_contact, monodromy)
-    (_, _, _, _, s_end, disc_end, P, dvm, xmax, c, fc, _) = _run(
-        model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc, events,
-        monodromy, P0, dvm0, True, 0, graded, 0, warn)
-    return _flow_result(s_end, disc_end, P, dvm, xmax, c, N, in_contact, monodromy)
+    fm = FlowMap(model, excitation, method=method, dt=dt, steps_per_contact=steps_per_contact,
+                 rtol=rtol, atol=atol, events=events, graded=graded, warn=warn)
+    fm._stacklevel = 3  # a warning points at flow's caller
+    return fm(state0, t0, duration, monodromy=monodromy, disc0=disc0, max_steps=max_steps)
 
 
 def _sensitivity_seed(N, ne, in_contact, monodromy):
@@ -332,32 +294,37 @@ def _flow_result(s_end, disc_end, P, dvm, xmax, c, N, in_contact, monodromy):
 class FlowMap:
     """``flow`` of one model and excitation over many intervals, with the per-call Python work
     done once: the arguments are validated and the kernel's arrays prepared at construction,
-    and each call integrates one interval with the same kernel call as ``flow`` (bitwise the
-    same result; tests/nlbeam/test_flowmap.py). For callers that integrate thousands of short
-    intervals (shooting and continuation), where ``flow``'s checks cost as much as the
-    integration. ``dt``: the fixed step (adjusted down per call, as in ``flow``, so that the
-    duration is a whole number of steps); ``max_steps``: per interval, as in ``flow``."""
+    and each call integrates one interval (``flow`` is one call of a FlowMap). For callers
+    that integrate thousands of short intervals (shooting and continuation), where the checks
+    cost as much as the integration. The step decisions are its ``solver``'s
+    (nlbeam.solver.Solver). ``dt``: the fixed step (adjusted down per call so that the
+    duration is a whole number of steps); ``max_steps``: per interval; ``warn``: warn when a
+    contact got fewer than MIN_STEPS_PER_CONTACT steps (fixed-step methods)."""
 
     def __init__(self, model, excitation, *, method="rk4", dt=None, steps_per_contact=None,
-                 rtol=1e-10, atol=1e-14, events=True, graded=True):
+                 rtol=1e-10, atol=1e-14, events=True, graded=True, warn=True):
+        self.solver = solver = Solver(method, dt, steps_per_contact, rtol, atol, events, graded)
+        _check_model(model, excitation)
         lo, hi = excitation.time_span()
         t_lo = lo if math.isfinite(lo) else 0.0
-        # the same checks as flow, on a representative span (each call checks its own span)
-        self.dt, self.spc = _prepare(model, excitation, method, dt, steps_per_contact, t_lo,
+        # the checks of one integration, on a representative span (each call checks its own)
+        self.dt, self.spc = _prepare(model, excitation, solver, t_lo,
                                      t_lo + 1.0 if not math.isfinite(hi) else hi)
         self.model, self.excitation, self.method = model, excitation, method
-        self.meth = METHODS[method]
+        self.meth = solver.code
         self.sysa = model.kernel_arrays()
         self.xc, self.xp, self.xtab = excitation.kernel_args()
         self.kernel = model.kernels().integrate_kernel
         self.span = (lo, hi)
         self.rtol, self.atol = float(rtol), float(atol)
         self.events, self.graded = bool(events), bool(graded)
-        self.h_init_cap = 1e-3 / max(excitation.max_frequency(), 1.0)
+        self.h_init_cap = solver.first_step_cap(excitation)
         N, ne = model.n_dof, model.n_elements
         self.N, self.ne = N, ne
         self.geometry = model.element_geometry()
-        self.event_el = [e for e in range(ne) if _k.has_event(self.geometry[0][e])]
+        self.event_el = solver.event_elements(model)
+        self.warn = bool(warn)
+        self._stacklevel = 2  # a warning points at the caller
         self._empty1 = np.empty(0)
         self._empty2 = np.empty((0, 2 * N))
         self._empty_e = np.empty((0, ne))
@@ -371,26 +338,18 @@ class FlowMap:
         new.excitation = excitation
         new.xc, new.xp, new.xtab = excitation.kernel_args()
         new.span = excitation.time_span()
-        new.h_init_cap = 1e-3 / max(excitation.max_frequency(), 1.0)
+        new.h_init_cap = self.solver.first_step_cap(excitation)
         return new
 
     def _disc(self, s0, t0):
-        """The contact state at t0 of a state s0 by flow's start-in-contact rule."""
-        disc = np.zeros((self.ne, 2))
-        if self.event_el:
-            et, w, wy, gap = self.geometry
-            N = self.N
-            y, yd, _, st = _k.excite(float(t0), self.xc, self.xp, self.xtab)  # as evaluate
-            if st != 0:
-                raise ValueError("t: outside the time span the excitation is defined on "
-                                 f"({self.span})")
-            for e in self.event_el:
-                d = w[e] @ s0[:N] + wy[e] * y - gap[e]
-                dd = w[e] @ s0[N:] + wy[e] * yd
-                if d > 0:
-                    disc[e, 0] = 1.0
-                    disc[e, 1] = dd if dd > _k.VMINUS_FLOOR else _k.VMINUS_FLOOR
-        return disc
+        """The contact state at t0 of a state s0 by the solver's start-in-contact rule."""
+        if not self.event_el:
+            return np.zeros((self.ne, 2))
+        y, yd, _, st = _k.excite(float(t0), self.xc, self.xp, self.xtab)  # as evaluate
+        if st != 0:
+            raise ValueError("t: outside the time span the excitation is defined on "
+                             f"({self.span})")
+        return self.solver.start_contact(self.geometry, s0, y, yd, self.event_el)
 
     def __call__(self, state0, t0, duration, *, monodromy=False, disc0=None, dt=None,
                  max_steps=100_000_000):
@@ -400,28 +359,20 @@ class FlowMap:
         if not duration > 0:
             raise ValueError(f"duration: must be > 0 s, got {duration!r}")
         t_end = t0 + duration
-        lo, hi = self.span
-        tol = 1e-9 * max(abs(t0), abs(t_end), 1.0)
-        if t0 < lo - tol or t_end > hi + tol:
-            raise ValueError(f"t_end: the span [{t0}, {t_end}] s must lie inside the "
-                             f"excitation's span [{lo}, {hi}] s")
+        _check_span(self.span, t0, t_end)
         if dt is None:
             dt = self.dt
         else:
             dt = float(dt)
-            if dt > self._dt_checked:  # a longer step than checked so far: flow's checks
+            if dt > self._dt_checked:  # a longer step than checked so far: check it
                 positive("dt", dt, unit="s")
-                if self.method in _STABILITY:
-                    _check_stable_step(self.model, self.excitation, self.method, dt)
+                self.solver.check_stable(self.model, self.excitation, dt)
                 self._dt_checked = dt
             elif not dt > 0:
                 raise ValueError(f"dt: must be > 0 s, got {dt!r}")
-        if self.method != "adaptive":
-            dt = duration / math.ceil(duration / dt - 1e-9)
+        dt = self.solver.whole_step(duration, dt)
         N, ne = self.N, self.ne
-        s0 = np.array(state0, dtype=float).ravel()
-        if s0.shape != (2 * N,) or not np.all(np.isfinite(s0)):
-            raise ValueError(f"x0: must be a finite state [x_1..x_N, v_1..v_N] of length {2 * N}")
+        s0 = _state(self.model, state0, "state0")
         if disc0 is None:
             disc = self._disc(s0, t0)
         else:
@@ -443,5 +394,7 @@ class FlowMap:
                              disc_end, P_end, dvm_end, xmax, c, fc)
         if status != 0:
             raise IntegrationError(_status_message(status, fc[0], self.method))
+        if self.warn:
+            self.solver.warn_few_contact_steps(c[5], c[6], self._stacklevel)
         return _flow_result(s_end, disc_end, P_end, dvm_end, xmax, c, N, in_contact,
                             monodromy)

@@ -1,6 +1,10 @@
-import warnings
+import os
+import sys
 
 import pytest
+
+# shared test helpers: ``from helpers import ...`` (tests/helpers.py)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 
 @pytest.fixture(autouse=True)

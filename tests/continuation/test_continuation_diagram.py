@@ -8,8 +8,9 @@ import pytest
 
 import continuation as C
 import nlbeam
-from continuation.diagram import _harmonic_amplitudes, _on_branch
-from continuation.shooting import steady_state
+from continuation.diagram import _halves_distance, _harmonic_amplitudes, _on_branch, _polish
+from continuation.shooting import _problem_from_state, steady_state
+from helpers import DUFF, F, hb_coefficients, hb_fold
 
 A = 1e-4
 
@@ -95,13 +96,6 @@ def test_superharmonic_resonance_of_order_2_against_brute_force():
 
 
 def test_refined_duffing_fold_matches_harmonic_balance_to_8_digits():
-    import importlib.util
-    import pathlib
-    path = pathlib.Path(__file__).with_name("test_continuation_paths.py")
-    spec = importlib.util.spec_from_file_location("_paths", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    DUFF, F, hb_coefficients, hb_fold = mod.DUFF, mod.F, mod.hb_coefficients, mod.hb_fold
     model = nlbeam.Duffing(**DUFF)
     sol = C.periodic_solution(model, F, 0.1, dt_scale=0.2)
     frc = C.continue_parameter(sol, "frequency", (0.1, 0.5), model=model, dt_scale=0.2)
@@ -114,3 +108,40 @@ def test_refined_duffing_fold_matches_harmonic_balance_to_8_digits():
     assert r.digits > 8
     assert abs(r.value - f_hb) < 1e-8 * f_hb
     assert abs(r.value - f_hb) < 10 * r.tolerance + 1e-12  # the stated accuracy holds
+
+
+def test_the_halves_vector_integrates_with_the_problems_steps_per_contact():
+    # a period-1 orbit solved as a period-2 problem repeats after half the period: its halves
+    # vector is zero to Newton's tolerance when it is integrated with the map that was solved
+    # (steps_per_contact=8 here); before, it was integrated with the default 32 steps per
+    # contact (issue 12), which leaves the integrator's difference
+    from types import SimpleNamespace
+
+    m = nlbeam.BeamImpact.paper()
+    f = 44.0
+    integ = C.Integrator(steps_per_contact=8)
+    s0 = steady_state(m, A, f, integrator=integ)
+    prob, u0 = _problem_from_state(m, A, f, 2, s0, 1, integ)
+    prob, u, p = _polish(prob, u0, f, 1e-11)
+    assert prob.minimal_order(u, p) == 1
+    assert _halves_distance(SimpleNamespace(problem=prob, u=u, p=p)) < 1e-8
+    # the same distance with the default steps per contact: what the slip computed
+    default = _problem_from_state(m, A, f, 2, s0, 1, C.Integrator())[0]
+    default.boundaries, default.scale_u = prob.boundaries, prob.scale_u
+    default.steps_per_period = prob.steps_per_period
+    assert _halves_distance(SimpleNamespace(problem=default, u=u, p=p)) > 1e-6
+
+
+def test_harmonic_amplitudes_follow_the_integrator():
+    # the superharmonics' spectra are integrated with the diagram's integrator: refining its
+    # contact steps converges (before, the integrator was ignored and all three were equal)
+    m = nlbeam.BeamImpact.paper()
+    f = 44.0
+    s0 = steady_state(m, A, f, efolds=12)
+    X = {spc: _harmonic_amplitudes(m, A, f, s0, integrator=C.Integrator(steps_per_contact=spc))
+         for spc in (16, 64, 256)}
+    e16 = np.max(np.abs(X[16] - X[256]))
+    e64 = np.max(np.abs(X[64] - X[256]))
+    assert 0 < 4 * e64 < e16
+    assert np.array_equal(_harmonic_amplitudes(m, A, f, s0),
+                          _harmonic_amplitudes(m, A, f, s0, integrator=C.Integrator()))

@@ -164,7 +164,8 @@ def test_every_branch_says_why_it_ended_and_early_ends_are_loud(tmp_path):
     kw = dict(orders=(1,), n_grid=3, dt_scale=0.2, switch=False)
     full = C.frequency_response(m, F, (0.1, 0.5), **kw)
     assert [b.ends for b in full.branches] == [("left the parameter range",) * 2]
-    with pytest.warns(C.ContinuationWarning, match=r"branch 1 \(order 1\) at [0-9.]+ \(max_points\)"):
+    early = r"branch 1 \(order 1\) at [0-9.]+ \(max_points\)"
+    with pytest.warns(C.ContinuationWarning, match=early):
         short = C.frequency_response(m, F, (0.1, 0.5), max_points=5, **kw)
     (b,) = short.branches
     assert b.ends == ("left the parameter range", "max_points") and 0.1 < b.values[-1] < 0.5

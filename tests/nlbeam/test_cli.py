@@ -32,6 +32,7 @@ DEMO_FILES = ["demo.toml", "demo_bifurcations.csv", "demo_compare_1.png", "demo_
               "demo_time_history_1.png", "demo_time_history_2.png"]
 
 
+@pytest.mark.slow
 def test_demo_is_a_short_nlbeam_figures(tmp_path, capsys):
     """nlbeam demo writes its scene and every kind of figure and table of nlbeam figures:
     the diagram once (the band sweep does not touch it), the comparison and the history

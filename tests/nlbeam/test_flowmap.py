@@ -1,5 +1,5 @@
-"""nlbeam.integrate.FlowMap: the same kernel call as nlbeam.flow, hence bitwise the same
-results, with the per-call checks done once."""
+"""nlbeam.integrate.FlowMap: one map called many times (per-call step and contact state)
+gives bitwise what fresh nlbeam.flow calls give, with the per-call checks done once."""
 import numpy as np
 import pytest
 
@@ -46,8 +46,10 @@ def test_flowmap_checks_like_flow():
     fm = FlowMap(model, nlbeam.Harmonic(A, F), dt=1e-4)
     with pytest.raises(ValueError, match="duration"):
         fm([0.0, 0.0], 0.0, 0.0)
-    with pytest.raises(ValueError, match="x0"):
+    with pytest.raises(ValueError, match="^state0:"):
         fm([0.0, np.nan], 0.0, 0.01)
+    with pytest.raises(ValueError, match="^state0:"):
+        nlbeam.flow(model, nlbeam.Harmonic(A, F), [0.0, np.nan], 0.0, 0.01)
     with pytest.raises(ValueError, match="dt"):
         fm([0.0, 0.0], 0.0, 0.01, dt=-1e-4)
     with pytest.raises(ValueError, match="stability limit"):

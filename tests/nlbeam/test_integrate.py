@@ -259,9 +259,8 @@ def test_a_sampled_excitation_is_not_extrapolated():
 def test_too_few_steps_per_contact_warns(monkeypatch):
     # the contact step also obeys the explicit stability limit of the law (rate * h < 0.5),
     # so even steps_per_contact=4 gives ~8 steps; raise the threshold to see the warning path
-    import sys
-    integ = sys.modules["nlbeam.integrate"]
-    monkeypatch.setattr(integ, "MIN_STEPS_PER_CONTACT", 10_000)
+    import nlbeam.solver
+    monkeypatch.setattr(nlbeam.solver, "MIN_STEPS_PER_CONTACT", 10_000)
     with pytest.warns(RuntimeWarning, match="steps_per_contact"):
         tr = nlbeam.integrate(PAPER, F40, 0.1, dt=1e-4, steps_per_contact=4, graded=False)
     assert 0 < tr.min_steps_per_contact < 10_000

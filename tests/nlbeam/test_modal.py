@@ -246,6 +246,7 @@ def test_impacting_resonant_response_settles_with_n():
     assert 0.8e-3 < -umin[16] < 1.2e-3      # about 1 mm: the resonant response, not the SDOF's
 
 
+@pytest.mark.slow
 def test_truncation_moves_the_resonance_period_doubling_more_than_integration_does():
     """The first period doubling above 27.2 Hz on the resonant branch, refined (extended system,
     dt_scale 1, 1/2, 1/4, Richardson): its integrator tolerance is orders of magnitude below

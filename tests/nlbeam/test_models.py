@@ -89,6 +89,7 @@ def test_general_system_validates_matrices():
         nlbeam.System(np.eye(2), np.zeros((2, 2)), np.eye(2), (nlbeam.Contact(5, "hertz", 1.0),))
 
 
+@pytest.mark.slow
 def test_a_custom_jitted_force_equals_the_built_in_cubic_spring():
     from numba import njit
 

@@ -47,6 +47,7 @@ def linear_run():
     return model, noise, res
 
 
+@pytest.mark.slow
 def test_linear_response_psd_is_H2_G(linear_run):
     model, noise, res = linear_run
     f, P = res.psd("delta")
@@ -69,6 +70,7 @@ def test_linear_response_psd_is_H2_G(linear_run):
     assert abs(np.mean(Py[s2] / noise.psd(fy[s2])) - 1) < 4 * rel / math.sqrt(s2.sum() / 2)
 
 
+@pytest.mark.slow
 def test_linear_response_variance_is_the_integral(linear_run):
     model, noise, res = linear_run
     fg = np.linspace(0.0, 50.0, 400_001)
