@@ -54,7 +54,10 @@ class Bifurcation:
     (width of the final bracket in the parameter; it does not include the integrator's error,
     see docs/continuation_report.md for the convergence under step refinement); xmax (m);
     order of the branch it lies on; branch index; multipliers (for a grazing point: those of
-    the branch point on the far side of the bracket; None without stability)."""
+    the branch point on the far side of the bracket; None without stability); note: '' for a
+    bifurcation of the smooth map, or 'at grazing: multiplier jumps from .. to ..
+    (non-smooth)' where a multiplier jumps through +1, -1 or the unit circle at a grazing
+    point (reported there, with the grazing bracket as tolerance; see Tracer._detect_step)."""
 
     kind: str
     frequency: float
@@ -68,6 +71,12 @@ class Bifurcation:
     disc0: np.ndarray | None = None  # contact state at t = 0 when inside a contact (LN memory)
     integrator_error: float = float("nan")  # estimate, set by refine_bifurcations
     refined: object = None  # a continuation.refine.Refined, set by refine_bifurcations
+    note: str = ""
+
+    @property
+    def smooth(self):
+        """False for a bifurcation at a grazing point (a multiplier jumps there)."""
+        return not self.note.startswith("at grazing")
 
 
 @dataclass
@@ -140,6 +149,15 @@ def _to_branch(points, order, parameter, origin, ends=("", "")):
                   states=np.array([p.u.reshape(pr.n_seg, pr.N2) for p, pr in zip(points, probs)]),
                   boundaries=np.array([pr.boundaries for pr in probs]), origin=origin,
                   ends=tuple(ends))
+
+
+def _bifurcation(L, order, branch):
+    """The Bifurcation of a Located on branch number ``branch`` of this order."""
+    m_, A_, f_ = L.point.problem.setup(L.point.p)
+    return Bifurcation(L.kind, float(f_), float(L.point.p), float(L.point.xmax), order, branch,
+                       float(L.tolerance), L.point.multipliers,
+                       *L.point.problem.state_at_zero(L.point.u, L.point.p),
+                       note=getattr(L, "note", ""))
 
 
 def _both_ways(tracer, prob, u, p, stop=None):
@@ -371,15 +389,12 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
         branches.append(br)
         n_bifs = len(bifs)
         for L in located:
-            m_, A_, f_ = L.point.problem.setup(L.point.p)
-            bf = Bifurcation(L.kind, float(f_), float(L.point.p), float(L.point.xmax),
-                             order, bi, float(L.tolerance), L.point.multipliers,
-                             *L.point.problem.state_at_zero(L.point.u, L.point.p))
+            bf = _bifurcation(L, order, bi)
             if any(_same_point(bf, other) for other in bifs):
                 continue  # where a branch ran onto another one, its end point is already listed
             bifs.append(bf)
             if L.kind == "period-doubling":
-                pd_points.append((L.point, order, bi))
+                pd_points.append((L.point, order, bi if bf.smooth else None))
         lo, hi = float(np.min(br.frequency)), float(np.max(br.frequency))
         say(f"branch {bi + 1} (order {order}, {origin}): {lo:.6g}-{hi:.6g} Hz, "
             f"{len(br.values)} points, {len(bifs) - n_bifs} bifurcations, ends: "
@@ -422,8 +437,8 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
         # branch switching at period doublings of this order
         if switch and 2 * order in orders:
             for k, (pt, o, bi) in enumerate(pd_points):
-                if o != order or k in handled:
-                    continue
+                if o != order or k in handled or bi is None:
+                    continue  # (bi None: at a grazing point, no eigenvector to switch along)
                 handled.add(k)
                 tracer.label = (f"order-{2 * order} branch (from the period doubling at "
                                 f"{pt.p:.6g})")
@@ -606,10 +621,7 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
     _warn_early_ends([br], (lo, hi))
     bifs = []
     for L in loc:
-        m_, A_, f_ = L.point.problem.setup(L.point.p)
-        bifs.append(Bifurcation(L.kind, float(f_), float(L.point.p), float(L.point.xmax),
-                                solution.order, 0, float(L.tolerance), L.point.multipliers,
-                                *L.point.problem.state_at_zero(L.point.u, L.point.p)))
+        bifs.append(_bifurcation(L, solution.order, 0))
     frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=solution.amplitude,
                             parameter=parameter, p_range=(lo, hi), branches=[br],
                             bifurcations=bifs,
