@@ -1,7 +1,6 @@
 """Frequency-response diagrams: branches of every order, their bifurcations, save and load."""
 from __future__ import annotations
 
-import math
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -9,11 +8,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import nlbeam
-from nlbeam.solver import ADAPTIVE_SAMPLES_PER_PERIOD, period_step
+from nlbeam.solver import period_step
 
 from ._newton import ContinuationWarning, ConvergenceError
 from .pathfollow import Tracer
-from .shooting import Integrator, ShootingProblem, _problem_from_state, decay_rate, forcing
+from .seeding import brute_force
+from .shooting import Integrator, ShootingProblem, _problem_from_state, forcing
 
 
 @dataclass
@@ -174,33 +174,6 @@ def _both_ways(tracer, prob, u, p, stop=None):
     for L in loc_f:
         L.index += nb - 1
     return pts, loc_b + loc_f, (reason_b, reason)
-
-
-def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=1e-3):
-    """Periodic attractors from integrations on a frequency grid, sweeping up and down (the state
-    carried over). Returns a list of (frequency, order, state at t = 0)."""
-    found = []
-    rate = decay_rate(model)
-    nmax = max(orders)
-    for sweep in (freqs, freqs[::-1]):
-        x = None
-        for f in sweep:
-            # one stored sample per period: every spp-th step (adaptive: output sample)
-            spp = integrator.steps_per_period(model, f) or ADAPTIVE_SAMPLES_PER_PERIOD
-            n_tr = int(min(4000, max(40, math.ceil(efolds / rate * f))))
-            n_tot = n_tr + 4 * nmax
-            tr = integrator.integrate(model, forcing(amplitude, f), n_tot / f,
-                                      period_step(f, spp), x0=x, store_every=spp)
-            S = np.hstack([tr.x, tr.v])[: n_tot + 1]
-            x = tr.state_end
-            tail = S[-(3 * nmax + 1):]
-            sc = np.max(np.abs(tail), axis=0) + 1e-300
-            for n in sorted(orders):
-                r = np.max(np.abs(tail[n:] - tail[:-n]) / sc)
-                if r < settle:
-                    found.append((float(f), n, S[-1].copy()))
-                    break
-    return found
 
 
 def _on_branch(branches, order, f, xmax, state0, rel=2e-3, state_rel=0.05):
@@ -370,18 +343,74 @@ def _same_point(a, b, rel=1e-6):
             and abs(a.xmax - b.xmax) <= 1e-4 * max(abs(a.xmax), 1e-300))
 
 
+def _polished_starts(model, amplitude, frequency, parameter, orders, cand, segments,
+                     integrator, variational, tol, dropped):
+    """Newton-polished starting points of the candidates (f, order, state at t = 0, asked):
+    a list of (f, order, problem, u, p, asked). A candidate that turns out to be an orbit of
+    lower (minimal) order m is started as order m when m is asked for; every candidate that
+    gives no start is said in ``dropped`` (and with a ContinuationWarning when the caller
+    gave it)."""
+    out = []
+    for (f, n, s0, asked) in cand:
+        d0 = None
+        for attempt in range(2):  # the second: as an orbit of its minimal order
+            try:
+                prob, u0 = _problem_from_state(model, amplitude, f if parameter == "frequency"
+                                               else frequency, n, s0, segments, integrator,
+                                               variational=variational, disc0=d0)
+                pval = f
+                if parameter != "frequency":
+                    prob.parameter = parameter
+                    prob.scale_p = max(abs(prob.value()), 1e-300)
+                    pval = prob.value()
+                sol_prob, u, p = _polish(prob, u0, pval, tol)
+            except (ConvergenceError, nlbeam.IntegrationError) as err:
+                why = f"{f:.6g} Hz (order {n}): did not converge ({err})"
+                if asked:
+                    warnings.warn(
+                        f"continuation: the start at {f:.9g} Hz (order {n}) did not converge"
+                        f" and was dropped ({err}); give a better state (from integration to "
+                        "the attractor, or a PeriodicSolution's state0), finer integration or "
+                        "segments=4", ContinuationWarning, stacklevel=4)
+                dropped.append(why)
+                break
+            m = sol_prob.minimal_order(u, p) if n > 1 else 1
+            if m == n:
+                out.append((f, n, sol_prob, u, p, asked))
+                break
+            why = (f"{f:.6g} Hz: the order-{n} candidate is an orbit of order {m}, "
+                   + ("started as such" if m in orders else "not asked for"))
+            if asked:
+                warnings.warn(f"continuation: the start at {f:.9g} Hz: {why}",
+                              ContinuationWarning, stacklevel=4)
+            if m not in orders:
+                dropped.append(why)
+            if m not in orders or attempt:
+                break
+            s0, d0 = sol_prob.state_at_zero(u, p)
+            n = m
+    return out
+
+
 def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer, integrator,
                  segments, n_grid, switch, starts, brute, variational=True, progress=None):
     branches, bifs, pd_points = [], [], []
     t_start = time.perf_counter()
     say = progress if progress is not None else (lambda msg: None)
     cand = []
+    dropped = []  # grid integrations and candidates that gave no start, and why
     if brute and parameter == "frequency":
         grid = np.linspace(p_range[0], p_range[1], n_grid)
-        cand = brute_force(model, amplitude, grid, orders, integrator)
+        cand = brute_force(model, amplitude, grid, orders, integrator, segments=segments,
+                           stability=variational, report=dropped)
         say(f"brute-force grid: {len(cand)} periodic attractors at {n_grid} frequencies "
             f"({time.perf_counter() - t_start:.1f} s)")
     cand = [(f, n, s0, False) for (f, n, s0) in cand] + [(f, n, s0, True) for (f, n, s0) in starts]
+    seeds = _polished_starts(model, amplitude, frequency, parameter, orders, cand, segments,
+                             integrator, variational, tracer.tol, dropped)
+    if dropped:
+        say(f"{len(dropped)} grid integration(s) or start(s) gave no starting point: "
+            + "; ".join(dropped))
 
     def add(points, located, order, origin, ends):
         bi = len(branches)
@@ -402,29 +431,8 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
 
     handled = set()
     for order in sorted(orders):
-        for (f, n, s0, asked) in cand:
+        for (f, n, sol_prob, u, p, asked) in seeds:
             if n != order:
-                continue
-            A = amplitude
-            pval = f if parameter == "frequency" else None
-            try:
-                prob, u0 = _problem_from_state(model, A, f if parameter == "frequency"
-                                               else frequency, order, s0, segments, integrator,
-                                               variational=variational)
-                if parameter != "frequency":
-                    prob.parameter = parameter
-                    prob.scale_p = max(abs(prob.value()), 1e-300)
-                    pval = prob.value()
-                sol_prob, u, p = _polish(prob, u0, pval, tracer.tol)
-            except (ConvergenceError, nlbeam.IntegrationError) as err:
-                if asked:  # a start given by the caller; the grid's are dropped quietly
-                    warnings.warn(
-                        f"continuation: the start at {f:.9g} Hz (order {order}) did not converge"
-                        f" and was dropped ({err}); give a better state (from integration to "
-                        "the attractor, or a PeriodicSolution's state0), finer integration or "
-                        "segments=4", ContinuationWarning, stacklevel=3)
-                continue
-            if sol_prob.minimal_order(u, p) != order:
                 continue
             ev = sol_prob.evaluate(u, p, jac=False, jac_p=False)
             if _on_branch(branches, order, f, ev.xmax,
