@@ -71,7 +71,9 @@ class Bifurcation:
     disc0: np.ndarray | None = None  # contact state at t = 0 when inside a contact (LN memory)
     integrator_error: float = float("nan")  # estimate, set by refine_bifurcations
     refined: object = None  # a continuation.refine.Refined, set by refine_bifurcations
-    note: str = ""
+    note: str = ""  # see the class doc; for a grazing point 'k changes of the number of
+    # impacts within the bracket' where k close ones were merged (Tracer steps may or may not
+    # resolve them one by one)
 
     @property
     def smooth(self):
@@ -343,6 +345,23 @@ def _same_point(a, b, rel=1e-6):
             and abs(a.xmax - b.xmax) <= 1e-4 * max(abs(a.xmax), 1e-300))
 
 
+def _merged_grazing(bf, bifs):
+    """True when bf is a grazing point within the bracket of a grazing point of the same
+    branch already in ``bifs`` (the number of impacts changes more than once there: whether
+    the tracer's steps resolve the changes one by one is up to round-off); that one's
+    tolerance is widened to cover bf's bracket and its note counts the changes."""
+    if bf.kind != "grazing":
+        return False
+    for o in bifs:
+        if (o.kind == "grazing" and o.branch == bf.branch and o.order == bf.order
+                and abs(o.value - bf.value) <= o.tolerance + bf.tolerance):
+            o.tolerance = max(o.tolerance, abs(o.value - bf.value) + bf.tolerance)
+            k = int(o.note.split()[0]) if o.note.endswith("within the bracket") else 1
+            o.note = f"{k + 1} changes of the number of impacts within the bracket"
+            return True
+    return False
+
+
 def _polished_starts(model, amplitude, frequency, parameter, orders, cand, segments,
                      integrator, variational, tol, dropped):
     """Newton-polished starting points of the candidates (f, order, state at t = 0, asked):
@@ -365,7 +384,7 @@ def _polished_starts(model, amplitude, frequency, parameter, orders, cand, segme
                     pval = prob.value()
                 sol_prob, u, p = _polish(prob, u0, pval, tol)
             except (ConvergenceError, nlbeam.IntegrationError) as err:
-                why = f"{f:.6g} Hz (order {n}): did not converge ({err})"
+                why = (f, f"the order-{n} candidate did not converge ({err})")
                 if asked:
                     warnings.warn(
                         f"continuation: the start at {f:.9g} Hz (order {n}) did not converge"
@@ -378,10 +397,10 @@ def _polished_starts(model, amplitude, frequency, parameter, orders, cand, segme
             if m == n:
                 out.append((f, n, sol_prob, u, p, asked))
                 break
-            why = (f"{f:.6g} Hz: the order-{n} candidate is an orbit of order {m}, "
+            why = (f, f"the order-{n} candidate is an orbit of order {m}, "
                    + ("started as such" if m in orders else "not asked for"))
             if asked:
-                warnings.warn(f"continuation: the start at {f:.9g} Hz: {why}",
+                warnings.warn(f"continuation: the start at {f:.9g} Hz: {why[1]}",
                               ContinuationWarning, stacklevel=4)
             if m not in orders:
                 dropped.append(why)
@@ -410,7 +429,7 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                              integrator, variational, tracer.tol, dropped)
     if dropped:
         say(f"{len(dropped)} grid integration(s) or start(s) gave no starting point: "
-            + "; ".join(dropped))
+            + "; ".join(f"{f:.6g} Hz: {why}" for f, why in dropped))
 
     def add(points, located, order, origin, ends):
         bi = len(branches)
@@ -419,7 +438,7 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
         n_bifs = len(bifs)
         for L in located:
             bf = _bifurcation(L, order, bi)
-            if any(_same_point(bf, other) for other in bifs):
+            if any(_same_point(bf, other) for other in bifs) or _merged_grazing(bf, bifs):
                 continue  # where a branch ran onto another one, its end point is already listed
             bifs.append(bf)
             if L.kind == "period-doubling":
@@ -461,7 +480,43 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                     if o2 == order and k2 not in handled and \
                             abs(pt2.p - end.p) < 1e-3 * abs(end.p) + 1e-12:
                         handled.add(k2)
+    _warn_hidden(dropped, branches, orders, n_grid, p_range)
     return branches, bifs, time.perf_counter() - t_start
+
+
+def _stable_at(branches, f):
+    """True when a stable stretch of some branch (two consecutive stable points) spans f."""
+    for b in branches:
+        if b.stable is None:
+            return True  # stability unknown: nothing to say
+        F = b.frequency
+        lo, hi = np.minimum(F[:-1], F[1:]), np.maximum(F[:-1], F[1:])
+        if np.any((lo <= f) & (f <= hi) & b.stable[:-1] & b.stable[1:]):
+            return True
+    return False
+
+
+def _warn_hidden(dropped, branches, orders, n_grid, p_range):
+    """One ContinuationWarning naming the grid frequencies where the integration reached an
+    attractor that the diagram does not show: no periodic orbit of the orders asked for (or
+    one that did not converge or is of another order), and no stable stretch of any branch
+    there."""
+    spacing = (p_range[1] - p_range[0]) / max(n_grid - 1, 1)
+    where = {}
+    for f, why in dropped:
+        if not _stable_at(branches, f):
+            where.setdefault(round(f, 9), why)
+    if where:
+        fs = sorted(where)
+        warnings.warn(
+            f"continuation: at {len(fs)} grid frequencies the integration reached no periodic "
+            f"attractor of the orders asked for ({', '.join(map(str, orders))}) and no branch is "
+            "stable there, so the diagram shows no attractor: "
+            + "; ".join(f"{f:.6g} Hz: {where[f]}" for f in fs)
+            + ". The attractor is chaotic, quasi-periodic or of another order (or its orbit did "
+            "not converge); try more orders, a finer grid (n_grid; spacing now "
+            f"{spacing:.3g} Hz), or look at the time series there (nlbeam.integrate).",
+            ContinuationWarning, stacklevel=4)
 
 
 _EARLY_ENDS = ("step underflow", "max_points", "could not move the segment boundaries")

@@ -492,6 +492,8 @@ class Tracer:
                         loc = self.locate_p(prob, prev, pt, k, tf_prev[k], tf[k])
                     else:
                         loc = self.locate(prob, z, t, ds, k, tf_prev[k], tf[k], prev.corr)
+                        if loc is None and prev.problem is prob and pt.problem is prob:
+                            loc = self.locate_chord(prob, prev, pt, k, tf_prev[k], tf[k])
                     if loc is None:  # not located: the bracket is the step
                         loc = (pt, abs(pt.p - prev.p))
                     out.append(Located(kind, loc[0], loc[1], index))
@@ -520,7 +522,9 @@ class Tracer:
                 if s_pair is not None and sa is not None and sb is not None:
                     loc = self.locate(prob, z, t, sb, k, ta[k], tb[k], prev.corr, s_a=sa,
                                       p_a=a.p, n_impacts=a.n_impacts)
-                elif a.problem is prob and b.problem is prob:
+                if loc is None and a.problem is prob and b.problem is prob:
+                    # (after a jump; or the step's own predictors failed next to the grazing
+                    # point, where the branch bends fastest: the chord's)
                     loc = self.locate_chord(prob, a, b, k, ta[k], tb[k])
                 if loc is None:
                     loc = (b, abs(b.p - a.p))
@@ -651,35 +655,60 @@ class Tracer:
         e_p = np.zeros(len(w) + 1)
         e_p[-1] = 1.0
         lo, hi, glo, ghi = pa.p, pb.p, g_a, g_b
+        tlo, thi = g_a, g_b  # the test function's values at lo, hi (glo, ghi: Illinois')
         best, side = None, 0
+
+        def solve(p):
+            lam = (p - pa.p) / (pb.p - pa.p)
+            u = pa.u + lam * (pb.u - pa.u)
+            zs, evs, _ = self.correct(prob, np.r_[u / w, p / wp], e_p, fixed_p=True)
+            pt = self._point(prob, zs, evs)
+            if pt.n_impacts != pa.n_impacts or pt.multipliers is None:
+                raise ConvergenceError("left the stretch")
+            return pt
+
         for _ in range(60):
             p = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
             if not (min(lo, hi) < p < max(lo, hi)):
                 p = 0.5 * (lo + hi)
-            lam = (p - pa.p) / (pb.p - pa.p)
-            u = pa.u + lam * (pb.u - pa.u)
             try:
-                zs, evs, _ = self.correct(prob, np.r_[u / w, p / wp], e_p, fixed_p=True)
+                pt = solve(p)
             except ConvergenceError:
-                return None
-            pt = self._point(prob, zs, evs)
-            if pt.n_impacts != pa.n_impacts or pt.multipliers is None:
                 return None
             g = self._tests(pt)[k]
             best = pt
+            if g == 0:
+                return best, 0.0
             if np.sign(g) == np.sign(glo):
-                lo, glo = p, g
+                lo, glo, tlo = p, g, g
                 if side == -1:
                     ghi *= 0.5
                 side = -1
             else:
-                hi, ghi = p, g
+                hi, ghi, thi = p, g, g
                 if side == 1:
                     glo *= 0.5
                 side = 1
-            if abs(hi - lo) <= self.bif_tol * abs(p) or g == 0:
+            if abs(hi - lo) <= self.bif_tol * abs(p):
                 break
-        return best, abs(hi - lo)
+        return self._secant_root(best, lo, hi, tlo, thi, solve, abs(hi - lo)), abs(hi - lo)
+
+    def _secant_root(self, best, lo, hi, tlo, thi, solve, width_p):
+        """The point at the secant root of the final bracket [lo, hi] (test function tlo,
+        thi there; its width in p: width_p) when it solves, else ``best``: the reported point
+        then does not depend on which end of the bracket the regula falsi happened to try last
+        (so round-off moves it by far less than the bracket)."""
+        if not (np.isfinite(tlo) and np.isfinite(thi)) or tlo == thi:
+            return best
+        if width_p < 1e-2 * self.bif_tol * abs(best.p):
+            return best  # a bracket far below bif_tol: round-off moves best by less
+        x = lo - tlo * (hi - lo) / (thi - tlo)
+        if not (min(lo, hi) < x < max(lo, hi)):
+            return best
+        try:
+            return solve(x)
+        except ConvergenceError:
+            return best
 
     def locate(self, prob, z_a, t_a, ds, k, g_a, g_b, C_a=None, s_a=0.0, p_a=None,
                n_impacts=None):
@@ -690,47 +719,57 @@ class Tracer:
         impacts per period: the stretch is not smooth)."""
         lo, hi = s_a, ds
         glo, ghi = g_a, g_b
+        tlo, thi = g_a, g_b  # the test function's values at lo, hi (glo, ghi: Illinois')
         p_lo = z_a[-1] * prob.scale_p if p_a is None else p_a
         best = None
         p_hi = None
         side = 0
+
+        def solve(s):
+            zs, evs, _ = self.correct(prob, z_a + s * t_a, t_a, C_a)
+            if not prob.variational:
+                # the fold's test function is the tangent's p-component: from the Jacobian
+                # at the solution itself (the corrector's is the predictor's, updated), or
+                # the fold moves by ~1e-5
+                evs = prob.evaluate(zs[:-1] * prob.scale_u, zs[-1] * prob.scale_p,
+                                    jac=True, jac_p=True)
+                self.n_evaluations += len(zs) + 1
+            pt = self._point(prob, zs, evs, t_a)
+            if n_impacts is not None and pt.n_impacts != n_impacts:
+                raise ConvergenceError("left the stretch")
+            return pt
+
         for _ in range(60):
             s = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
             if not (lo < s < hi):
                 s = 0.5 * (lo + hi)
             try:
-                zs, evs, _ = self.correct(prob, z_a + s * t_a, t_a, C_a)
-                if not prob.variational:
-                    # the fold's test function is the tangent's p-component: from the Jacobian
-                    # at the solution itself (the corrector's is the predictor's, updated), or
-                    # the fold moves by ~1e-5
-                    evs = prob.evaluate(zs[:-1] * prob.scale_u, zs[-1] * prob.scale_p,
-                                        jac=True, jac_p=True)
-                    self.n_evaluations += len(zs) + 1
+                pt = solve(s)
             except ConvergenceError:
-                return None
-            pt = self._point(prob, zs, evs, t_a)
-            if n_impacts is not None and pt.n_impacts != n_impacts:
                 return None
             g = self._tests(pt)[k]
             best = pt
             if np.sign(g) == np.sign(glo):
-                lo, glo, p_lo = s, g, pt.p
+                lo, glo, p_lo, tlo = s, g, pt.p, g
                 if side == -1:
                     ghi *= 0.5
                 side = -1
             else:
-                hi, ghi, p_hi = s, g, pt.p
+                hi, ghi, p_hi, thi = s, g, pt.p, g
                 if side == 1:
                     glo *= 0.5
                 side = 1
+            if g == 0:
+                return best, 0.0
             if (p_hi is not None and abs(p_hi - p_lo) <= self.bif_tol * max(abs(pt.p), 1e-300)
                     and hi - lo < 1e-6):
                 break
-            if g == 0 or hi - lo < 1e-15:
+            if hi - lo < 1e-15:
                 break
         tol = abs(p_hi - p_lo) if p_hi is not None else np.inf
-        return best, tol
+        if p_hi is None:
+            return best, tol
+        return self._secant_root(best, lo, hi, tlo, thi, solve, tol), tol
 
 
 def _passes(z_first, t_first, prev, z, prob):

@@ -63,8 +63,8 @@ def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=
     of ``orders``). One that has not settled is handed to shooting from its end state, for each
     order in turn: an orbit within ``near`` (scaled, ``state_scales``) of the end state whose
     largest multiplier has modulus <= 1 + light (any, with stability=False) is taken, as an
-    orbit of its minimal order (when that order is asked for). report: a list to which a line
-    per grid integration that gave nothing is appended (frequency, why)."""
+    orbit of its minimal order (when that order is asked for). report: a list to which
+    (frequency, why) is appended for each grid integration that gave nothing."""
     found = []
     rate = decay_rate(model)
     nmax = max(orders)
@@ -85,29 +85,40 @@ def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=
             if settled:
                 found.append((float(f), settled[0], S[-1].copy()))
                 continue
-            seed = _seed_by_shooting(model, amplitude, f, orders, S[-1], tail, integrator,
-                                     light, near, segments, stability)
+            seed, seen = _seed_by_shooting(model, amplitude, f, orders, S[-1], tail,
+                                           integrator, light, near, segments, stability)
             if seed is not None:
                 found.append(seed)
             elif report is not None:
-                report.append(f"{f:.6g} Hz: not settled (periodicity "
-                              + ", ".join(f"order {n}: {v:.1e}" for n, v in r.items())
-                              + "), and shooting from the end state found no attractor")
+                report.append((float(f), "not periodic (change over "
+                               + ", ".join(f"{n}: {v:.1e}" for n, v in r.items())
+                               + " periods), "
+                               + (("near it only " + ", ".join(seen)) if seen else
+                                  "no periodic orbit near it")))
     return found
 
 
 def _seed_by_shooting(model, amplitude, f, orders, s_end, tail, integrator, light, near,
                       segments, stability):
-    """(f, order, state at t = 0) of the orbit an unsettled integration approaches, or None."""
+    """((f, order, state at t = 0) of the orbit an unsettled integration approaches, or None;
+    what shooting found otherwise, as short strings)."""
     sc = state_scales(tail, f)
+    seen = {}
     for n in sorted(orders):
         sol = shoot_from(model, amplitude, f, n, s_end, integrator, segments=segments,
                          stability=stability)
-        if sol is None or sol.minimal_order not in orders:
+        if sol is None:
             continue
+        m = int(sol.minimal_order)
         if np.max(np.abs(sol.state0 - s_end) / sc) > near:
             continue  # Newton went to another orbit
-        if stability and abs(sol.multipliers[0]) > 1.0 + light:
-            continue  # not the attractor (an unstable orbit the trajectory passed near)
-        return (float(f), int(sol.minimal_order), np.asarray(sol.state0, dtype=float).copy())
-    return None
+        mu = abs(sol.multipliers[0]) ** (m / n) if stability else None  # of the order-m map
+        if m not in orders:
+            seen.setdefault(m, f"an orbit of order {m}")
+            continue
+        if stability and mu > 1.0 + light:
+            # not the attractor: an unstable orbit the trajectory wanders near
+            seen.setdefault(m, f"an unstable orbit of order {m} (|mu| {mu:.3g})")
+            continue
+        return (float(f), m, np.asarray(sol.state0, dtype=float).copy()), []
+    return None, list(seen.values())

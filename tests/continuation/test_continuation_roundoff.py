@@ -147,18 +147,47 @@ def test_reference_window_lists_both_period_doublings_of_the_switched_branch(ref
         assert main.stable[lo] != main.stable[hi] or f in (main.frequency[0], main.frequency[-1])
 
 
-@pytest.mark.parametrize("what", ["parameters x (1 + 1e-13)", "parameters x (1 - 1e-13)",
-                                  "amplitude x (1 + 1e-13)", "dt_scale 1 - 1e-9"])
-def test_round_off_perturbed_on_purpose_keeps_the_structure(reference_window, what):
+PERTURBATIONS = ("parameters x (1 + 1e-13)", "parameters x (1 - 1e-13)",
+                 "amplitude x (1 + 1e-13)", "dt_scale 1 - 1e-9")
+
+
+@pytest.fixture(scope="module")
+def perturbed_windows():
     """dt_scale 1 - 1e-9 rounds the steps per period up (101 instead of 100): a 1 % change of
     the step, more than round-off."""
-    if what.startswith("parameters"):
-        frc = _window(_scaled(1 + (1e-13 if "+" in what else -1e-13)))
-    elif what.startswith("amplitude"):
-        frc = _window(nlbeam.BeamImpact.paper(), amplitude=1e-4 * (1 + 1e-13))
-    else:
-        frc = _window(nlbeam.BeamImpact.paper(), dt_scale=1 - 1e-9)
-    assert structure_differences(reference_window, frc) == []
+    out = {}
+    for what in PERTURBATIONS:
+        if what.startswith("parameters"):
+            out[what] = _window(_scaled(1 + (1e-13 if "+" in what else -1e-13)))
+        elif what.startswith("amplitude"):
+            out[what] = _window(nlbeam.BeamImpact.paper(), amplitude=1e-4 * (1 + 1e-13))
+        else:
+            out[what] = _window(nlbeam.BeamImpact.paper(), dt_scale=1 - 1e-9)
+    return out
+
+
+@pytest.mark.parametrize("what", PERTURBATIONS)
+def test_round_off_perturbed_on_purpose_keeps_the_structure(reference_window,
+                                                            perturbed_windows, what):
+    assert structure_differences(reference_window, perturbed_windows[what]) == []
+
+
+def _table_rows(frc):
+    from nlbeam.app.scenes.numbers import bifurcation_error, error_bound, with_error, xmax_error
+    rows = []
+    for b in sorted(frc.bifurcations, key=lambda b: (b.kind, b.order, b.frequency)):
+        e = bifurcation_error(b, frc)
+        rows.append((b.kind, b.order, with_error(b.frequency, e),
+                     with_error(b.xmax, xmax_error(b, frc, e)), error_bound(e)))
+    return rows
+
+
+@pytest.mark.parametrize("what", PERTURBATIONS[:3])
+def test_bifurcation_table_prints_the_same_under_round_off(reference_window,
+                                                           perturbed_windows, what):
+    """The committed table's numbers (nlbeam.app.scenes.numbers: each to the digits its
+    error supports) do not change when round-off does."""
+    assert _table_rows(perturbed_windows[what]) == _table_rows(reference_window)
 
 
 def test_structure_differences_sees_a_missing_bifurcation(reference_window):
@@ -172,3 +201,40 @@ def test_structure_differences_sees_a_missing_bifurcation(reference_window):
     b = [b for b in frc.bifurcations if b.kind == "period-doubling" and b.order == 1][0]
     b.frequency += 10 * b.tolerance + 1e-6 * b.frequency
     assert structure_differences(reference_window, frc)
+
+
+def test_numbers_are_printed_to_the_decade_of_their_error():
+    from nlbeam.app.scenes.numbers import error_bound, with_error
+    rng = np.random.default_rng(3)
+    for _ in range(2000):
+        v = rng.choice([-1, 1]) * 10 ** rng.uniform(-5, 3)
+        e = 10 ** rng.uniform(-12, 1) * abs(v)
+        txt = with_error(v, e)
+        k = np.floor(np.log10(e))
+        assert abs(float(txt) - v) <= 0.5 * 10 ** k * (1 + 1e-9) + 1e-15 * abs(v), (v, e, txt)
+        # no digit below the error's decade: dropping one more digit changes the value
+        assert float(error_bound(e)) >= e * (1 - 1e-12)
+        assert float(error_bound(e)) < 10 ** (k + 1) * (1 + 1e-12)
+    assert with_error(6.648660903, 1.4e-3) == "6.649"
+    assert with_error(12.74368194, 1.3e-7) == "12.7436819"
+    assert with_error(1.12215e-4, 3e-9) == "0.000112215"
+    assert with_error(0.01, 0.5) == "0"
+    assert with_error(3.0, float("nan")) == "3"
+    # round-off far below the error does not change the text (away from a rounding boundary)
+    assert with_error(13.31385961 * (1 + 3e-12), 1.3e-7) == with_error(13.31385961, 1.3e-7)
+
+
+def test_grazing_points_within_each_others_bracket_are_merged():
+    from continuation.diagram import Bifurcation, _merged_grazing
+
+    def g(f, tol, branch=0, kind="grazing"):
+        return Bifurcation(kind, f, f, 1e-4, 2, branch, tol, None)
+
+    bifs = [g(7.78976, 1.1e-3)]
+    assert _merged_grazing(g(7.79126, 3.1e-3), bifs)
+    assert bifs[0].frequency == 7.78976 and bifs[0].tolerance == pytest.approx(1.5e-3 + 3.1e-3)
+    assert bifs[0].note.startswith("2 changes")
+    assert _merged_grazing(g(7.7930, 1e-4), bifs) and bifs[0].note.startswith("3 changes")
+    assert not _merged_grazing(g(7.80, 1e-4), bifs)  # outside the brackets
+    assert not _merged_grazing(g(7.7898, 1e-4, branch=1), bifs)  # another branch
+    assert not _merged_grazing(g(7.7898, 1e-4, kind="fold"), bifs)

@@ -112,7 +112,7 @@ def test_lower_order_candidate_is_traced_as_its_order():
     dropped = []
     seeds = _polished_starts(sysm, 2.0, None, "frequency", (2,), [(2.0, 2, s_end, False)], 1,
                              integ, True, 1e-10, dropped)
-    assert seeds == [] and len(dropped) == 1 and "order 1" in dropped[0]
+    assert seeds == [] and len(dropped) == 1 and "order 1" in dropped[0][1]
 
 
 def test_paper_model_grid_at_low_frequency_finds_the_harmonic_orbit():
@@ -172,3 +172,23 @@ def _interpolated(frc, f):
                     and b.stable[i + 1] and F[i] != F[i + 1]):
                 out.append(X[i] + (f - F[i]) / (F[i + 1] - F[i]) * (X[i + 1] - X[i]))
     return out
+
+
+def test_grid_attractor_that_the_diagram_does_not_show_is_loud():
+    """An attractor the grid integrated is never hidden: where it is of an order not asked for
+    (the Duffing's order-1 orbit, orders=(2,)), or not periodic (the paper model at 25 Hz,
+    A = 0.1 mm: no orbit of orders 1-3 is stable there), and no branch is stable, one
+    ContinuationWarning names each grid frequency."""
+    with pytest.warns(C.ContinuationWarning, match=r"4 grid frequencies.*2 Hz: the order-2 "
+                      r"candidate is an orbit of order 1, not asked for"):
+        frc = C.frequency_response(duffing_with_stop(), 2.0, (1.5, 3.0), orders=(2,), n_grid=4)
+    assert frc.branches == []
+    with pytest.warns(C.ContinuationWarning, match=r"2 grid frequencies.*24\.9 Hz: not periodic"
+                      r".*25\.1 Hz: not periodic"):
+        frc = C.frequency_response(nlbeam.BeamImpact.paper(), 1e-4, (24.9, 25.1),
+                                   orders=(1, 2, 3), n_grid=2)
+    assert not any(b.stable.any() for b in frc.branches)
+    # and where the diagram has the attractor, no such warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", C.ContinuationWarning)
+        C.frequency_response(duffing_with_stop(), 2.0, (1.5, 3.0), orders=(1, 2), n_grid=4)
