@@ -61,9 +61,10 @@ def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=
     An integration whose states once per period repeat after n periods to ``settle`` (relative
     to the orbit's amplitude, ``periodicity``) gives an order-n candidate (the smallest such n
     of ``orders``). One that has not settled is handed to shooting from its end state, for each
-    order in turn: an orbit within ``near`` (scaled, ``state_scales``) of the end state whose
-    largest multiplier has modulus <= 1 + light (any, with stability=False) is taken, as an
-    orbit of its minimal order (when that order is asked for). report: a list to which
+    order whose periodicity is at most 2 near, in turn: an orbit within ``near`` (scaled,
+    ``state_scales``) of the end state whose largest multiplier has modulus <= 1 + light (any,
+    with stability=False) is taken, as an orbit of its minimal order (when that order is asked
+    for). report: a list to which
     (frequency, why) is appended for each grid integration that gave nothing."""
     found = []
     rate = decay_rate(model)
@@ -85,8 +86,12 @@ def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=
             if settled:
                 found.append((float(f), settled[0], S[-1].copy()))
                 continue
-            seed, seen = _seed_by_shooting(model, amplitude, f, orders, S[-1], tail,
-                                           integrator, light, near, segments, stability)
+            # an orbit within `near` of the end state that attracts the trajectory keeps the
+            # states after n periods within about twice that of each other
+            tries = [n for n in sorted(orders) if r[n] <= 2 * near]
+            seed, seen = _seed_by_shooting(model, amplitude, f, tries, S[-1], tail,
+                                           integrator, light, near, segments, stability,
+                                           orders)
             if seed is not None:
                 found.append(seed)
             elif report is not None:
@@ -98,13 +103,14 @@ def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=
     return found
 
 
-def _seed_by_shooting(model, amplitude, f, orders, s_end, tail, integrator, light, near,
-                      segments, stability):
-    """((f, order, state at t = 0) of the orbit an unsettled integration approaches, or None;
-    what shooting found otherwise, as short strings)."""
+def _seed_by_shooting(model, amplitude, f, tries, s_end, tail, integrator, light, near,
+                      segments, stability, orders):
+    """((f, order, state at t = 0) of the orbit an unsettled integration approaches (shooting
+    for each order in ``tries``), or None; what shooting found otherwise, as short
+    strings)."""
     sc = state_scales(tail, f)
     seen = {}
-    for n in sorted(orders):
+    for n in tries:
         sol = shoot_from(model, amplitude, f, n, s_end, integrator, segments=segments,
                          stability=stability)
         if sol is None:
