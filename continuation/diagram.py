@@ -1,7 +1,6 @@
 """Frequency-response diagrams: branches of every order, their bifurcations, save and load."""
 from __future__ import annotations
 
-import math
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -9,11 +8,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import nlbeam
-from nlbeam.solver import ADAPTIVE_SAMPLES_PER_PERIOD, period_step
+from nlbeam.solver import period_step
 
 from ._newton import ContinuationWarning, ConvergenceError
 from .pathfollow import Tracer
-from .shooting import Integrator, ShootingProblem, _problem_from_state, decay_rate, forcing
+from .seeding import brute_force
+from .shooting import Integrator, ShootingProblem, _problem_from_state, forcing
 
 
 @dataclass
@@ -54,7 +54,10 @@ class Bifurcation:
     (width of the final bracket in the parameter; it does not include the integrator's error,
     see docs/continuation_report.md for the convergence under step refinement); xmax (m);
     order of the branch it lies on; branch index; multipliers (for a grazing point: those of
-    the branch point on the far side of the bracket; None without stability)."""
+    the branch point on the far side of the bracket; None without stability); note: '' for a
+    bifurcation of the smooth map, or 'at grazing: multiplier jumps from .. to ..
+    (non-smooth)' where a multiplier jumps through +1, -1 or the unit circle at a grazing
+    point (reported there, with the grazing bracket as tolerance; see Tracer._detect_step)."""
 
     kind: str
     frequency: float
@@ -68,6 +71,14 @@ class Bifurcation:
     disc0: np.ndarray | None = None  # contact state at t = 0 when inside a contact (LN memory)
     integrator_error: float = float("nan")  # estimate, set by refine_bifurcations
     refined: object = None  # a continuation.refine.Refined, set by refine_bifurcations
+    note: str = ""  # see the class doc; for a grazing point 'k changes of the number of
+    # impacts within the bracket' where k close ones were merged (Tracer steps may or may not
+    # resolve them one by one)
+
+    @property
+    def smooth(self):
+        """False for a bifurcation at a grazing point (a multiplier jumps there)."""
+        return not self.note.startswith("at grazing")
 
 
 @dataclass
@@ -142,6 +153,15 @@ def _to_branch(points, order, parameter, origin, ends=("", "")):
                   ends=tuple(ends))
 
 
+def _bifurcation(L, order, branch):
+    """The Bifurcation of a Located on branch number ``branch`` of this order."""
+    m_, A_, f_ = L.point.problem.setup(L.point.p)
+    return Bifurcation(L.kind, float(f_), float(L.point.p), float(L.point.xmax), order, branch,
+                       float(L.tolerance), L.point.multipliers,
+                       *L.point.problem.state_at_zero(L.point.u, L.point.p),
+                       note=getattr(L, "note", ""))
+
+
 def _both_ways(tracer, prob, u, p, stop=None):
     """Trace from (u, p) both ways: (points, located, (reason at the first point, at the last))."""
     fwd, loc_f, reason = tracer.trace(prob, u, p, direction=1, stop=stop)
@@ -156,33 +176,6 @@ def _both_ways(tracer, prob, u, p, stop=None):
     for L in loc_f:
         L.index += nb - 1
     return pts, loc_b + loc_f, (reason_b, reason)
-
-
-def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=1e-3):
-    """Periodic attractors from integrations on a frequency grid, sweeping up and down (the state
-    carried over). Returns a list of (frequency, order, state at t = 0)."""
-    found = []
-    rate = decay_rate(model)
-    nmax = max(orders)
-    for sweep in (freqs, freqs[::-1]):
-        x = None
-        for f in sweep:
-            # one stored sample per period: every spp-th step (adaptive: output sample)
-            spp = integrator.steps_per_period(model, f) or ADAPTIVE_SAMPLES_PER_PERIOD
-            n_tr = int(min(4000, max(40, math.ceil(efolds / rate * f))))
-            n_tot = n_tr + 4 * nmax
-            tr = integrator.integrate(model, forcing(amplitude, f), n_tot / f,
-                                      period_step(f, spp), x0=x, store_every=spp)
-            S = np.hstack([tr.x, tr.v])[: n_tot + 1]
-            x = tr.state_end
-            tail = S[-(3 * nmax + 1):]
-            sc = np.max(np.abs(tail), axis=0) + 1e-300
-            for n in sorted(orders):
-                r = np.max(np.abs(tail[n:] - tail[:-n]) / sc)
-                if r < settle:
-                    found.append((float(f), n, S[-1].copy()))
-                    break
-    return found
 
 
 def _on_branch(branches, order, f, xmax, state0, rel=2e-3, state_rel=0.05):
@@ -352,18 +345,91 @@ def _same_point(a, b, rel=1e-6):
             and abs(a.xmax - b.xmax) <= 1e-4 * max(abs(a.xmax), 1e-300))
 
 
+def _merged_grazing(bf, bifs):
+    """True when bf is a grazing point within the bracket of a grazing point of the same
+    branch already in ``bifs`` (the number of impacts changes more than once there: whether
+    the tracer's steps resolve the changes one by one is up to round-off); that one's
+    tolerance is widened to cover bf's bracket and its note counts the changes."""
+    if bf.kind != "grazing":
+        return False
+    for o in bifs:
+        if (o.kind == "grazing" and o.branch == bf.branch and o.order == bf.order
+                and abs(o.value - bf.value) <= o.tolerance + bf.tolerance):
+            o.tolerance = max(o.tolerance, abs(o.value - bf.value) + bf.tolerance)
+            k = int(o.note.split()[0]) if o.note.endswith("within the bracket") else 1
+            o.note = f"{k + 1} changes of the number of impacts within the bracket"
+            return True
+    return False
+
+
+def _polished_starts(model, amplitude, frequency, parameter, orders, cand, segments,
+                     integrator, variational, tol, dropped):
+    """Newton-polished starting points of the candidates (f, order, state at t = 0, asked):
+    a list of (f, order, problem, u, p, asked). A candidate that turns out to be an orbit of
+    lower (minimal) order m is started as order m when m is asked for; every candidate that
+    gives no start is said in ``dropped`` (and with a ContinuationWarning when the caller
+    gave it)."""
+    out = []
+    for (f, n, s0, asked) in cand:
+        d0 = None
+        for attempt in range(2):  # the second: as an orbit of its minimal order
+            try:
+                prob, u0 = _problem_from_state(model, amplitude, f if parameter == "frequency"
+                                               else frequency, n, s0, segments, integrator,
+                                               variational=variational, disc0=d0)
+                pval = f
+                if parameter != "frequency":
+                    prob.parameter = parameter
+                    prob.scale_p = max(abs(prob.value()), 1e-300)
+                    pval = prob.value()
+                sol_prob, u, p = _polish(prob, u0, pval, tol)
+            except (ConvergenceError, nlbeam.IntegrationError) as err:
+                why = (f, f"the order-{n} candidate did not converge ({err})")
+                if asked:
+                    warnings.warn(
+                        f"continuation: the start at {f:.9g} Hz (order {n}) did not converge"
+                        f" and was dropped ({err}); give a better state (from integration to "
+                        "the attractor, or a PeriodicSolution's state0), finer integration or "
+                        "segments=4", ContinuationWarning, stacklevel=4)
+                dropped.append(why)
+                break
+            m = sol_prob.minimal_order(u, p) if n > 1 else 1
+            if m == n:
+                out.append((f, n, sol_prob, u, p, asked))
+                break
+            why = (f, f"the order-{n} candidate is an orbit of order {m}, "
+                   + ("started as such" if m in orders else "not asked for"))
+            if asked:
+                warnings.warn(f"continuation: the start at {f:.9g} Hz: {why[1]}",
+                              ContinuationWarning, stacklevel=4)
+            if m not in orders:
+                dropped.append(why)
+            if m not in orders or attempt:
+                break
+            s0, d0 = sol_prob.state_at_zero(u, p)
+            n = m
+    return out
+
+
 def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer, integrator,
                  segments, n_grid, switch, starts, brute, variational=True, progress=None):
     branches, bifs, pd_points = [], [], []
     t_start = time.perf_counter()
     say = progress if progress is not None else (lambda msg: None)
     cand = []
+    dropped = []  # grid integrations and candidates that gave no start, and why
     if brute and parameter == "frequency":
         grid = np.linspace(p_range[0], p_range[1], n_grid)
-        cand = brute_force(model, amplitude, grid, orders, integrator)
+        cand = brute_force(model, amplitude, grid, orders, integrator, segments=segments,
+                           stability=variational, report=dropped)
         say(f"brute-force grid: {len(cand)} periodic attractors at {n_grid} frequencies "
             f"({time.perf_counter() - t_start:.1f} s)")
     cand = [(f, n, s0, False) for (f, n, s0) in cand] + [(f, n, s0, True) for (f, n, s0) in starts]
+    seeds = _polished_starts(model, amplitude, frequency, parameter, orders, cand, segments,
+                             integrator, variational, tracer.tol, dropped)
+    if dropped:
+        say(f"{len(dropped)} grid integration(s) or start(s) gave no starting point: "
+            + "; ".join(f"{f:.6g} Hz: {why}" for f, why in dropped))
 
     def add(points, located, order, origin, ends):
         bi = len(branches)
@@ -371,15 +437,12 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
         branches.append(br)
         n_bifs = len(bifs)
         for L in located:
-            m_, A_, f_ = L.point.problem.setup(L.point.p)
-            bf = Bifurcation(L.kind, float(f_), float(L.point.p), float(L.point.xmax),
-                             order, bi, float(L.tolerance), L.point.multipliers,
-                             *L.point.problem.state_at_zero(L.point.u, L.point.p))
-            if any(_same_point(bf, other) for other in bifs):
+            bf = _bifurcation(L, order, bi)
+            if any(_same_point(bf, other) for other in bifs) or _merged_grazing(bf, bifs):
                 continue  # where a branch ran onto another one, its end point is already listed
             bifs.append(bf)
             if L.kind == "period-doubling":
-                pd_points.append((L.point, order, bi))
+                pd_points.append((L.point, order, bi if bf.smooth else None))
         lo, hi = float(np.min(br.frequency)), float(np.max(br.frequency))
         say(f"branch {bi + 1} (order {order}, {origin}): {lo:.6g}-{hi:.6g} Hz, "
             f"{len(br.values)} points, {len(bifs) - n_bifs} bifurcations, ends: "
@@ -387,29 +450,8 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
 
     handled = set()
     for order in sorted(orders):
-        for (f, n, s0, asked) in cand:
+        for (f, n, sol_prob, u, p, asked) in seeds:
             if n != order:
-                continue
-            A = amplitude
-            pval = f if parameter == "frequency" else None
-            try:
-                prob, u0 = _problem_from_state(model, A, f if parameter == "frequency"
-                                               else frequency, order, s0, segments, integrator,
-                                               variational=variational)
-                if parameter != "frequency":
-                    prob.parameter = parameter
-                    prob.scale_p = max(abs(prob.value()), 1e-300)
-                    pval = prob.value()
-                sol_prob, u, p = _polish(prob, u0, pval, tracer.tol)
-            except (ConvergenceError, nlbeam.IntegrationError) as err:
-                if asked:  # a start given by the caller; the grid's are dropped quietly
-                    warnings.warn(
-                        f"continuation: the start at {f:.9g} Hz (order {order}) did not converge"
-                        f" and was dropped ({err}); give a better state (from integration to "
-                        "the attractor, or a PeriodicSolution's state0), finer integration or "
-                        "segments=4", ContinuationWarning, stacklevel=3)
-                continue
-            if sol_prob.minimal_order(u, p) != order:
                 continue
             ev = sol_prob.evaluate(u, p, jac=False, jac_p=False)
             if _on_branch(branches, order, f, ev.xmax,
@@ -422,8 +464,8 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
         # branch switching at period doublings of this order
         if switch and 2 * order in orders:
             for k, (pt, o, bi) in enumerate(pd_points):
-                if o != order or k in handled:
-                    continue
+                if o != order or k in handled or bi is None:
+                    continue  # (bi None: at a grazing point, no eigenvector to switch along)
                 handled.add(k)
                 tracer.label = (f"order-{2 * order} branch (from the period doubling at "
                                 f"{pt.p:.6g})")
@@ -438,7 +480,43 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                     if o2 == order and k2 not in handled and \
                             abs(pt2.p - end.p) < 1e-3 * abs(end.p) + 1e-12:
                         handled.add(k2)
+    _warn_hidden(dropped, branches, orders, n_grid, p_range)
     return branches, bifs, time.perf_counter() - t_start
+
+
+def _stable_at(branches, f):
+    """True when a stable stretch of some branch (two consecutive stable points) spans f."""
+    for b in branches:
+        if b.stable is None:
+            return True  # stability unknown: nothing to say
+        F = b.frequency
+        lo, hi = np.minimum(F[:-1], F[1:]), np.maximum(F[:-1], F[1:])
+        if np.any((lo <= f) & (f <= hi) & b.stable[:-1] & b.stable[1:]):
+            return True
+    return False
+
+
+def _warn_hidden(dropped, branches, orders, n_grid, p_range):
+    """One ContinuationWarning naming the grid frequencies where the integration reached an
+    attractor that the diagram does not show: no periodic orbit of the orders asked for (or
+    one that did not converge or is of another order), and no stable stretch of any branch
+    there."""
+    spacing = (p_range[1] - p_range[0]) / max(n_grid - 1, 1)
+    where = {}
+    for f, why in dropped:
+        if not _stable_at(branches, f):
+            where.setdefault(round(f, 9), why)
+    if where:
+        fs = sorted(where)
+        warnings.warn(
+            f"continuation: at {len(fs)} grid frequencies the integration reached no periodic "
+            f"attractor of the orders asked for ({', '.join(map(str, orders))}) and no branch is "
+            "stable there, so the diagram shows no attractor: "
+            + "; ".join(f"{f:.6g} Hz: {where[f]}" for f in fs)
+            + ". The attractor is chaotic, quasi-periodic or of another order (or its orbit did "
+            "not converge); try more orders, a finer grid (n_grid; spacing now "
+            f"{spacing:.3g} Hz), or look at the time series there (nlbeam.integrate).",
+            ContinuationWarning, stacklevel=4)
 
 
 _EARLY_ENDS = ("step underflow", "max_points", "could not move the segment boundaries")
@@ -606,10 +684,7 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
     _warn_early_ends([br], (lo, hi))
     bifs = []
     for L in loc:
-        m_, A_, f_ = L.point.problem.setup(L.point.p)
-        bifs.append(Bifurcation(L.kind, float(f_), float(L.point.p), float(L.point.xmax),
-                                solution.order, 0, float(L.tolerance), L.point.multipliers,
-                                *L.point.problem.state_at_zero(L.point.u, L.point.p)))
+        bifs.append(_bifurcation(L, solution.order, 0))
     frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=solution.amplitude,
                             parameter=parameter, p_range=(lo, hi), branches=[br],
                             bifurcations=bifs,

@@ -87,6 +87,7 @@ class Located:
     point: Point
     tolerance: float
     index: int  # the branch point before it
+    note: str = ""  # e.g. 'at grazing: ...' where a multiplier jumps across the unit circle
 
 
 def test_functions(mu):
@@ -397,46 +398,18 @@ class Tracer:
             pt = ptn
             tf = self._tests(pt)
             prev = pts[-1]
+            grazing = None
             if pt.n_impacts != prev.n_impacts:
-                g = self.locate_grazing(prob, z, t, ds, prev, pt, jumped)
-                located.append(Located("grazing", g[0], g[1], len(pts) - 1))
-                if (self.detect and jumped and g[0] is not pt and g[0].multipliers is not None
-                        and g[0].n_impacts == pt.n_impacts):
-                    # the jump landed beyond a stretch of the far side (from the grazing point
-                    # to pt) that no step traced: a test function that changes sign there
-                    tg = self._tests(g[0])
-                    for k, kind in enumerate(KINDS[1:], start=1):  # not folds (see below)
-                        if (np.sign(tg[k]) != np.sign(tf[k]) and tf[k] != 0 and tg[k] != 0
-                                and (kind != "neimark-sacker" or _has_pair_near_circle(
-                                    g[0].multipliers, pt.multipliers))):
-                            loc = self.locate_p(prob, g[0], pt, k, tg[k], tf[k])
-                            if loc is None:
-                                loc = (pt, abs(pt.p - g[0].p))
-                            located.append(Located(kind, loc[0], loc[1], len(pts) - 1))
+                grazing = self.locate_grazing(prob, z, t, ds, prev, pt, jumped)
+                located.append(Located("grazing", grazing[0], grazing[1], len(pts) - 1))
             if stop is not None and stop(pt):
                 pts.append(pt)
                 tfs.append(tf)
                 reason = "stop"
                 break
-            # test functions: along the step, or across a jump that kept the number of impacts
-            # (a natural-parameter step where the corrector failed: the map is smooth there
-            # as far as the impacts go; period doublings and Neimark-Sacker points are then
-            # located by bisection in p, folds not: p does not parametrise a fold)
-            if self.detect and (not jumped or pt.n_impacts == prev.n_impacts):
-                for k, kind in enumerate(KINDS):
-                    if jumped and kind == "fold":
-                        continue
-                    if np.sign(tf[k]) != np.sign(tfs[-1][k]) and tf[k] != 0:
-                        if kind == "neimark-sacker" and not _has_pair_near_circle(
-                                pts[-1].multipliers, pt.multipliers):
-                            continue
-                        if jumped:
-                            loc = self.locate_p(prob, prev, pt, k, tfs[-1][k], tf[k])
-                        else:
-                            loc = self.locate(prob, z, t, ds, k, tfs[-1][k], tf[k], prev.corr)
-                        if loc is None:  # not located: the bracket is the step
-                            loc = (pt, abs(pt.p - prev.p))
-                        located.append(Located(kind, loc[0], loc[1], len(pts) - 1))
+            if self.detect:
+                located += self._detect_step(prob, z, t, ds, prev, pt, tfs[-1], tf, jumped,
+                                             grazing, len(pts) - 1)
             steps.append(float(np.linalg.norm(zn - z)))
             pts.append(pt)
             tfs.append(tf)
@@ -489,6 +462,88 @@ class Tracer:
                     t_first = (z1 - z_first) / np.linalg.norm(z1 - z_first)
                 prob = prob2
         return pts, located, reason
+
+    # --- bifurcations on a step ---------------------------------------------------------------
+    def _detect_step(self, prob, z, t, ds, prev, pt, tf_prev, tf, jumped, grazing, index):
+        """The bifurcations on the accepted step from prev (scaled z, tangent t; test functions
+        tf_prev) to pt (tf), a step of arclength ds or a jump; grazing: what locate_grazing
+        returned when the number of impacts per period changes on the step, else None.
+        Returns a list of Located.
+
+        A smooth step (or a jump that kept the number of impacts; folds not there: p does not
+        parametrise one) is searched for sign changes of the test functions between its ends.
+        A step through a grazing point is split there (the multipliers are not smooth across
+        it): each smooth side, from its end to the point nearest the grazing point, is searched
+        and its sign changes located on it; a sign change between the two points that bracket
+        the grazing point (a multiplier jumps through +1, -1 or the unit circle there) is
+        reported at the grazing point with the grazing bracket as tolerance and a ``note``
+        naming the jump. So a stability change at (or within round-off of) a grazing point is
+        listed once, wherever round-off puts it relative to the grazing point."""
+        out = []
+        if grazing is None:
+            for k, kind in enumerate(KINDS):
+                if jumped and kind == "fold":
+                    continue
+                if np.sign(tf[k]) != np.sign(tf_prev[k]) and tf[k] != 0:
+                    if kind == "neimark-sacker" and not _has_pair_near_circle(
+                            prev.multipliers, pt.multipliers):
+                        continue
+                    if jumped:
+                        loc = self.locate_p(prob, prev, pt, k, tf_prev[k], tf[k])
+                    else:
+                        loc = self.locate(prob, z, t, ds, k, tf_prev[k], tf[k], prev.corr)
+                        if loc is None and prev.problem is prob and pt.problem is prob:
+                            loc = self.locate_chord(prob, prev, pt, k, tf_prev[k], tf[k])
+                    if loc is None:  # not located: the bracket is the step
+                        loc = (pt, abs(pt.p - prev.p))
+                    out.append(Located(kind, loc[0], loc[1], index))
+            return out
+        g_far, g_tol, g_near, s_pair = grazing[:4]
+        s_near, s_far = s_pair if s_pair is not None else (None, None)
+        nodes = [(prev, tf_prev, 0.0)]
+        for q, s in ((g_near, s_near), (g_far, s_far)):
+            if q is not prev and q is not pt and (q.multipliers is not None
+                                                  or q.tangent is not None):
+                nodes.append((q, self._tests(q), s))
+        nodes.append((pt, tf, ds))
+        for (a, ta, sa), (b, tb, sb) in zip(nodes[:-1], nodes[1:]):
+            across = a.n_impacts != b.n_impacts
+            for k, kind in enumerate(KINDS):
+                if not (np.sign(tb[k]) != np.sign(ta[k]) and tb[k] != 0):
+                    continue
+                if kind == "neimark-sacker" and not _has_pair_near_circle(a.multipliers,
+                                                                          b.multipliers):
+                    continue
+                if across:  # at the grazing point
+                    out.append(Located(kind, g_far, max(g_tol, abs(b.p - a.p)), index,
+                                       note=_jump_note(kind, a, b)))
+                    continue
+                loc = None
+                if s_pair is not None and sa is not None and sb is not None:
+                    loc = self.locate(prob, z, t, sb, k, ta[k], tb[k], prev.corr, s_a=sa,
+                                      p_a=a.p, n_impacts=a.n_impacts)
+                if loc is None and a.problem is prob and b.problem is prob:
+                    # (after a jump; or the step's own predictors failed next to the grazing
+                    # point, where the branch bends fastest: the chord's)
+                    loc = self.locate_chord(prob, a, b, k, ta[k], tb[k])
+                if loc is None:
+                    loc = (b, abs(b.p - a.p))
+                out.append(Located(kind, loc[0], loc[1], index))
+        return out
+
+    def locate_chord(self, prob, pa, pb, k, g_a, g_b):
+        """Regula falsi (``locate``) for test function k between two points on one smooth
+        stretch of a branch (the same number of impacts), with the corrector's hyperplanes
+        normal to the chord from pa to pb (a short stretch: folds included). Returns (Point,
+        tolerance) or None."""
+        w, wp = prob.scale_u, prob.scale_p
+        za = np.r_[pa.u / w, pa.p / wp]
+        d = np.r_[pb.u / w, pb.p / wp] - za
+        L = float(np.linalg.norm(d))
+        if L == 0.0:
+            return None
+        return self.locate(prob, za, d / L, L, k, g_a, g_b, pa.corr, p_a=pa.p,
+                           n_impacts=pa.n_impacts)
 
     # --- past a non-smooth point ----------------------------------------------------------------
     def jump(self, prob, pt, t):
@@ -547,8 +602,11 @@ class Tracer:
     def locate_grazing(self, prob, z_a, t_a, ds, pa, pb, jumped):
         """Bracket the point between pa and pb where the number of impacts per period changes,
         by bisection (on the arclength step, or in the parameter after a jump). Returns
-        (Point on the side of pb nearest the grazing point, width of the bracket in p)."""
+        (Point on the side of pb nearest the grazing point, width of the bracket in p,
+        Point on the side of pa nearest it (pa if none), (arclength of the two from z_a along
+        t_a, or None after a jump))."""
         best, lo_p, hi_p = pb, pa.p, pb.p
+        near = pa
         if jumped:
             w, wp = prob.scale_u, prob.scale_p
             u_lo = pa.u
@@ -565,10 +623,10 @@ class Tracer:
                 u = zs[:-1] * w
                 q = self._point(prob, zs, ev)
                 if q.n_impacts == pa.n_impacts:
-                    lo_p, u_lo = pm, u
+                    lo_p, u_lo, near = pm, u, q
                 else:
                     hi_p, best = pm, q
-            return best, abs(best.p - lo_p)  # the reported point to the near side
+            return best, abs(best.p - lo_p), near, None  # the reported point to the near side
         lo, hi = 0.0, ds
         for _ in range(self.grazing_iter):
             s = 0.5 * (lo + hi)
@@ -578,12 +636,12 @@ class Tracer:
                 break
             q = self._point(prob, zs, evs, t_a)
             if q.n_impacts == pa.n_impacts:
-                lo, lo_p = s, q.p
+                lo, lo_p, near = s, q.p, q
             else:
                 hi, hi_p, best = s, q.p, q
             if abs(hi_p - lo_p) <= self.bif_tol * abs(hi_p) * 10:
                 break
-        return best, abs(best.p - lo_p)
+        return best, abs(best.p - lo_p), near, (lo, hi)
 
     # --- bifurcation location -----------------------------------------------------------------
     def locate_p(self, prob, pa, pb, k, g_a, g_b):
@@ -597,80 +655,121 @@ class Tracer:
         e_p = np.zeros(len(w) + 1)
         e_p[-1] = 1.0
         lo, hi, glo, ghi = pa.p, pb.p, g_a, g_b
+        tlo, thi = g_a, g_b  # the test function's values at lo, hi (glo, ghi: Illinois')
         best, side = None, 0
+
+        def solve(p):
+            lam = (p - pa.p) / (pb.p - pa.p)
+            u = pa.u + lam * (pb.u - pa.u)
+            zs, evs, _ = self.correct(prob, np.r_[u / w, p / wp], e_p, fixed_p=True)
+            pt = self._point(prob, zs, evs)
+            if pt.n_impacts != pa.n_impacts or pt.multipliers is None:
+                raise ConvergenceError("left the stretch")
+            return pt
+
         for _ in range(60):
             p = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
             if not (min(lo, hi) < p < max(lo, hi)):
                 p = 0.5 * (lo + hi)
-            lam = (p - pa.p) / (pb.p - pa.p)
-            u = pa.u + lam * (pb.u - pa.u)
             try:
-                zs, evs, _ = self.correct(prob, np.r_[u / w, p / wp], e_p, fixed_p=True)
+                pt = solve(p)
             except ConvergenceError:
-                return None
-            pt = self._point(prob, zs, evs)
-            if pt.n_impacts != pa.n_impacts or pt.multipliers is None:
                 return None
             g = self._tests(pt)[k]
             best = pt
+            if g == 0:
+                return best, 0.0
             if np.sign(g) == np.sign(glo):
-                lo, glo = p, g
+                lo, glo, tlo = p, g, g
                 if side == -1:
                     ghi *= 0.5
                 side = -1
             else:
-                hi, ghi = p, g
+                hi, ghi, thi = p, g, g
                 if side == 1:
                     glo *= 0.5
                 side = 1
-            if abs(hi - lo) <= self.bif_tol * abs(p) or g == 0:
+            if abs(hi - lo) <= self.bif_tol * abs(p):
                 break
-        return best, abs(hi - lo)
+        return self._secant_root(best, lo, hi, tlo, thi, solve, abs(hi - lo)), abs(hi - lo)
 
-    def locate(self, prob, z_a, t_a, ds, k, g_a, g_b, C_a=None):
-        """Illinois regula falsi on the arclength step from z_a (test function k), until the
-        bracket's width in p is below bif_tol * |p|. Returns (Point, tolerance) or None."""
-        lo, hi = 0.0, ds
+    def _secant_root(self, best, lo, hi, tlo, thi, solve, width_p):
+        """The point at the secant root of the final bracket [lo, hi] (test function tlo,
+        thi there; its width in p: width_p) when it solves, else ``best``: the reported point
+        then does not depend on which end of the bracket the regula falsi happened to try last
+        (so round-off moves it by far less than the bracket)."""
+        if not (np.isfinite(tlo) and np.isfinite(thi)) or tlo == thi:
+            return best
+        if width_p < 1e-2 * self.bif_tol * abs(best.p):
+            return best  # a bracket far below bif_tol: round-off moves best by less
+        x = lo - tlo * (hi - lo) / (thi - tlo)
+        if not (min(lo, hi) < x < max(lo, hi)):
+            return best
+        try:
+            return solve(x)
+        except ConvergenceError:
+            return best
+
+    def locate(self, prob, z_a, t_a, ds, k, g_a, g_b, C_a=None, s_a=0.0, p_a=None,
+               n_impacts=None):
+        """Illinois regula falsi on the arclength step from z_a (test function k) between
+        s_a (the point there: parameter p_a, test function g_a) and ds (g_b), until the
+        bracket's width in p is below bif_tol * |p|. Returns (Point, tolerance) or None (a
+        corrector failed, or with ``n_impacts`` given a trial point had another number of
+        impacts per period: the stretch is not smooth)."""
+        lo, hi = s_a, ds
         glo, ghi = g_a, g_b
-        p_lo = z_a[-1] * prob.scale_p
+        tlo, thi = g_a, g_b  # the test function's values at lo, hi (glo, ghi: Illinois')
+        p_lo = z_a[-1] * prob.scale_p if p_a is None else p_a
         best = None
         p_hi = None
         side = 0
+
+        def solve(s):
+            zs, evs, _ = self.correct(prob, z_a + s * t_a, t_a, C_a)
+            if not prob.variational:
+                # the fold's test function is the tangent's p-component: from the Jacobian
+                # at the solution itself (the corrector's is the predictor's, updated), or
+                # the fold moves by ~1e-5
+                evs = prob.evaluate(zs[:-1] * prob.scale_u, zs[-1] * prob.scale_p,
+                                    jac=True, jac_p=True)
+                self.n_evaluations += len(zs) + 1
+            pt = self._point(prob, zs, evs, t_a)
+            if n_impacts is not None and pt.n_impacts != n_impacts:
+                raise ConvergenceError("left the stretch")
+            return pt
+
         for _ in range(60):
             s = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
             if not (lo < s < hi):
                 s = 0.5 * (lo + hi)
             try:
-                zs, evs, _ = self.correct(prob, z_a + s * t_a, t_a, C_a)
-                if not prob.variational:
-                    # the fold's test function is the tangent's p-component: from the Jacobian
-                    # at the solution itself (the corrector's is the predictor's, updated), or
-                    # the fold moves by ~1e-5
-                    evs = prob.evaluate(zs[:-1] * prob.scale_u, zs[-1] * prob.scale_p,
-                                        jac=True, jac_p=True)
-                    self.n_evaluations += len(zs) + 1
+                pt = solve(s)
             except ConvergenceError:
                 return None
-            pt = self._point(prob, zs, evs, t_a)
             g = self._tests(pt)[k]
             best = pt
             if np.sign(g) == np.sign(glo):
-                lo, glo, p_lo = s, g, pt.p
+                lo, glo, p_lo, tlo = s, g, pt.p, g
                 if side == -1:
                     ghi *= 0.5
                 side = -1
             else:
-                hi, ghi, p_hi = s, g, pt.p
+                hi, ghi, p_hi, thi = s, g, pt.p, g
                 if side == 1:
                     glo *= 0.5
                 side = 1
+            if g == 0:
+                return best, 0.0
             if (p_hi is not None and abs(p_hi - p_lo) <= self.bif_tol * max(abs(pt.p), 1e-300)
                     and hi - lo < 1e-6):
                 break
-            if g == 0 or hi - lo < 1e-15:
+            if hi - lo < 1e-15:
                 break
         tol = abs(p_hi - p_lo) if p_hi is not None else np.inf
-        return best, tol
+        if p_hi is None:
+            return best, tol
+        return self._secant_root(best, lo, hi, tlo, thi, solve, tol), tol
 
 
 def _passes(z_first, t_first, prev, z, prob):
@@ -685,6 +784,41 @@ def _passes(z_first, t_first, prev, z, prob):
         return False
     lam = float(np.clip((z_first - za) @ d / (L * L), 0.0, 1.0))
     return float(np.linalg.norm(za + lam * d - z_first)) < 0.1 * L + 1e-9
+
+
+def _critical(mu, kind):
+    """The multiplier of ``mu`` that crosses at a bifurcation of ``kind`` (+1: fold, -1: period
+    doubling, the unit circle: Neimark-Sacker): on the side where the test function is
+    negative (an odd number of real multipliers beyond +1 / below -1) the one of those nearest
+    the crossing point, else the largest real one inside."""
+    mu = np.asarray(mu)
+    if kind == "neimark-sacker":
+        c = mu[np.abs(mu.imag) > 1e-9 * np.abs(mu)]
+        c = c if c.size else mu
+        return c[np.argmin(np.abs(np.abs(c) - 1.0))]
+    one = 1.0 if kind == "fold" else -1.0
+    real = mu[np.abs(mu.imag) <= 1e-9 * np.abs(mu)].real
+    out = real[(real - one) * one > 0]
+    if out.size % 2:
+        return out[np.argmin(np.abs(out - one))]
+    pool = real if real.size else mu
+    return pool[np.argmax(np.abs(pool))]
+
+
+def _fmt_mu(m):
+    m = complex(m)
+    if abs(m.imag) <= 1e-9 * abs(m):
+        return f"{m.real:.4g}"
+    return f"{m.real:.4g}{m.imag:+.4g}i (|mu| {abs(m):.4g})"
+
+
+def _jump_note(kind, a, b):
+    """The note of a bifurcation reported at a grazing point: which multiplier jumps there
+    (points a and b on the two sides of the grazing point)."""
+    if a.multipliers is None or b.multipliers is None:
+        return "at grazing: the branch turns back at a corner (non-smooth)"
+    return (f"at grazing: multiplier jumps from {_fmt_mu(_critical(a.multipliers, kind))} to "
+            f"{_fmt_mu(_critical(b.multipliers, kind))} (non-smooth)")
 
 
 def _has_pair_near_circle(mu_a, mu_b):

@@ -207,13 +207,19 @@ def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders
     """Refine the folds / period doublings of a frequency diagram in place: each listed
     Bifurcation gets ``refined`` (a Refined), its ``frequency`` and ``value`` become the
     extrapolated value and ``tolerance`` the larger of its bracket and the integrator's error
-    estimate. Bifurcations whose extended system does not converge keep their diagram values
-    and get ``refined = None``. Returns the list of (bifurcation, Refined or the error)."""
+    estimate. Bifurcations whose extended system does not converge, and those at a grazing
+    point (``Bifurcation.smooth`` False), keep their diagram values and get ``refined = None``.
+    Returns the list of (bifurcation, Refined or the error)."""
     if frc.parameter != "frequency":
         raise ValueError("frc: refine_bifurcations needs a frequency diagram")
     out = []
     for bf in frc.bifurcations:
         if bf.kind not in kinds or (orders is not None and bf.order not in orders):
+            continue
+        if not getattr(bf, "smooth", True):
+            # a multiplier jumps across the unit circle at a grazing point: no regular root of
+            # the extended system; the grazing bracket stays the tolerance
+            out.append((bf, ConvergenceError(f"not refined: {bf.note}")))
             continue
         r = None
         for segs in (segments, 4 * segments):  # multiple shooting as the fallback

@@ -214,8 +214,9 @@ class ShootingProblem(Problem):
         try:
             return fm(state, phase0 / f, dur, monodromy=monodromy, disc0=disc0, dt=dt,
                       max_steps=int(50 * dur / dt) + 20000)
-        except nlbeam.IntegrationError as exc:
-            # an iterate far from any orbit (e.g. a huge penetration): a failed Newton step
+        except (nlbeam.IntegrationError, ValueError) as exc:
+            # an iterate far from any orbit (e.g. a huge penetration, or a parameter so far off
+            # that the fixed step is beyond the method's stability limit): a failed Newton step
             raise ConvergenceError(f"shooting: integration failed ({exc}); try a smaller step, "
                                    "a better guess, or for a strongly unstable orbit multiple "
                                    "shooting (segments=8 or more, guess=states at the "

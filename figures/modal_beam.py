@@ -38,12 +38,18 @@ def diagram(n, log=print):
 
 
 def bifurcation_rows(frcs):
+    """Fold and period-doubling rows, each number to the digits its error supports."""
+    from nlbeam.app.scenes.numbers import bifurcation_error, with_error, xmax_error
+
     rows = []
     for n, frc in frcs.items():
         for b in sorted(frc.bifurcations, key=lambda b: b.frequency):
             if b.kind in ("fold", "period-doubling"):
+                e_f = max(bifurcation_error(b, frc), 1e-4)  # printed to 4 decimals at most
                 rows.append({"n_modes": n, "kind": b.kind, "order": b.order,
-                             "frequency_hz": f"{b.frequency:.4f}", "xmax_mm": f"{b.xmax * 1e3:.4f}"})
+                             "frequency_hz": with_error(b.frequency, e_f),
+                             "xmax_mm": with_error(b.xmax * 1e3, 1e3 * max(
+                                 xmax_error(b, frc, e_f), 1e-7))})
     return rows
 
 

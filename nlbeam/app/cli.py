@@ -85,7 +85,7 @@ def _frc(args):
     if not args.quiet:
         for b in frc.bifurcations:
             print(f"{b.kind:16s} order {b.order}  f = {b.frequency:.4f} Hz  "
-                  f"|x|max = {b.xmax * 1e3:.4f} mm")
+                  f"|x|max = {b.xmax * 1e3:.4f} mm" + (f"  ({b.note})" if b.note else ""))
     if args.plot:
         from .plots.files import files_backend, save_figure
         from .plots.frequency_response import plot_frequency_response

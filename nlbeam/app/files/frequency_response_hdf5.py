@@ -48,6 +48,8 @@ def save_frequency_response(frc, path):
             gf = h.create_group("bifurcations")
             bif = frc.bifurcations
             gf.create_dataset("kind", data=np.array([b.kind for b in bif], dtype="S16"))
+            gf.create_dataset("note", data=np.array([b.note.encode() for b in bif],
+                                                    dtype=h5py.string_dtype()))
             for name in ("frequency", "value", "xmax", "order", "branch", "tolerance",
                          "integrator_error"):
                 gf.create_dataset(name, data=np.array([getattr(b, name) for b in bif],
@@ -111,6 +113,7 @@ def load_frequency_response(path):
                 and gf["multipliers"].shape[1] else gf["multipliers"][i],
                 integrator_error=float(gf["integrator_error"][i]) if "integrator_error" in gf
                 else float("nan"),
+                note=s(gf["note"][i]) if "note" in gf else "",
                 state0=gf["state0"][i],
                 disc0=gf["disc0"][i].reshape(-1, 2) if "disc0" in gf and gf["disc0"].shape[1]
                 and not np.all(np.isnan(gf["disc0"][i])) else None))

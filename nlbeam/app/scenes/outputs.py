@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import os
 
 from .. import defaults
 from ..compare import map_peaks
 from ..files import write_text_atomic
 from ..plots.scene import scene_figure
+from .numbers import bifurcation_error, error_bound, with_error, xmax_error
 from .schema import build_noise, default_f_max
 
 __all__ = ["write_outputs", "write_table", "distinct"]
@@ -74,10 +76,17 @@ def write_table(d, variants, out_dir):
     for label, m, p, s, per, sto, _ in distinct(kind, variants):
         if kind == "moments":
             mo = sto.moments(ch)
-            rows.append({"variant": label, "channel": ch,
-                         **{k: mo[k] for k in ("mean", "std", "skewness", "kurtosis",
-                                               "se_mean", "se_std", "se_skewness",
-                                               "se_kurtosis") if k in mo}})
+            row = {"variant": label, "channel": ch,
+                   **{k: mo[k] for k in ("mean", "std", "skewness", "kurtosis",
+                                         "se_mean", "se_std", "se_skewness",
+                                         "se_kurtosis") if k in mo}}
+            for key in ("mean", "std", "skewness", "kurtosis"):
+                # to the digits the standard error supports (one more: it is a std. error)
+                e = row.get(f"se_{key}")
+                if key in row and e is not None and math.isfinite(e) and e > 0:
+                    row[key] = with_error(row[key], e / 10)
+                    row[f"se_{key}"] = f"{e:.2g}"
+            rows.append(row)
         elif kind == "peaks":
             f_max = d.get("f_max", default_f_max(p, s))
             for pk in map_peaks(sto.psd(ch), per, build_noise(s), f_range=(0.0, f_max)):
@@ -87,9 +96,11 @@ def write_table(d, variants, out_dir):
                 rows.append({"variant": label, "channel": ch, **row})
         else:
             for b in per.bifurcations:
+                e_f = bifurcation_error(b, per)
                 rows.append({"variant": label, "kind": b.kind, "order": b.order,
-                             "frequency_hz": b.frequency, "xmax_m": b.xmax,
-                             "tolerance": b.tolerance})
+                             "frequency_hz": with_error(b.frequency, e_f),
+                             "xmax_m": with_error(b.xmax, xmax_error(b, per, e_f)),
+                             "tolerance": error_bound(e_f)})
     buf = io.StringIO()
     cols = list(dict.fromkeys(k for r in rows for k in r)) or ["variant"]
     wr = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
