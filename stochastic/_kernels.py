@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 OK = 0
@@ -151,3 +152,29 @@ def all_finite(x):
         if not math.isfinite(x[j]):
             return j
     return -1
+
+
+@njit(cache=True)
+def batch_sums(x, size, out):
+    """Per-batch sums of consecutive batches of ``size`` samples of ``x`` (x.size a multiple
+    of size): out[k] = [n, mean, M2, M3, M4, n_positive] of batch k (central sums as
+    :func:`block_moments`; n_positive counts samples > 0). Returns NON_FINITE on a bad
+    sample."""
+    buf = np.empty(5)
+    nb = x.size // size
+    for k in range(nb):
+        seg = x[k * size: (k + 1) * size]
+        st = block_moments(seg, buf)
+        if st != OK:
+            return st
+        npos = 0
+        for j in range(seg.size):
+            if seg[j] > 0.0:
+                npos += 1
+        out[k, 0] = buf[0]
+        out[k, 1] = buf[1]
+        out[k, 2] = buf[2]
+        out[k, 3] = buf[3]
+        out[k, 4] = buf[4]
+        out[k, 5] = npos
+    return OK
