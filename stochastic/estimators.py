@@ -278,26 +278,26 @@ class StreamingHistogram:
         self.batch_size *= 2
 
     def _count_batches(self, x):
-        """Count ``x`` into the fine-batch rows (and the totals), batch by batch."""
-        j, n = 0, x.size
-        tmp = np.zeros(self.counts.size, dtype=np.int64)
+        """Count ``x`` into the totals and the fine-batch rows (compiled), merging rows
+        whenever the table is full; returns [below, above] of this block."""
         out = np.zeros(2, dtype=np.int64)
-        while j < n:
-            take = min(self.batch_size - self._bfill, n - j)
-            tmp[:] = 0
-            st = _kernels.histogram_count(x[j: j + take], self._edges, self.uniform, tmp, out)
+        state = np.zeros(3, dtype=np.int64)
+        j = 0
+        while True:
+            st = _kernels.histogram_count_batches(x[j:], self._edges, self.uniform, self._bc,
+                                                  self._nbat, self._bfill, self.batch_size,
+                                                  self.counts, out, state)
             if st != 0:  # pragma: no cover - checked before
                 raise ValueError("x: contains non-finite samples")
-            self.counts += tmp
-            self._bc[self._nbat] += tmp
-            self._bfill += take
-            j += take
+            j += int(state[0])
+            self._nbat, self._bfill = int(state[1]), int(state[2])
             if self._bfill == self.batch_size:
                 self._nbat += 1
                 self._bfill = 0
-                if self._nbat == self._bc.shape[0] - 1:
-                    self._coarsen()
-        return out
+            if self._nbat == self._bc.shape[0] - 1:
+                self._coarsen()
+            if j >= x.size:
+                return out
 
     @property
     def edges(self):
@@ -357,14 +357,15 @@ class StreamingHistogram:
         self._bc = np.concatenate([np.zeros((self._bc.shape[0], add_lo), np.int64), self._bc,
                                    np.zeros((self._bc.shape[0], add_hi), np.int64)], axis=1)[:rows + 1]
 
-    def result(self, n_eff=None) -> dict:
+    def result(self, n_eff=None, min_window=None) -> dict:
         """centres, density (1/units), edges, counts, under/overflow, fraction inside, and
         ``density_se``: the standard error of each bin's density over independent records of
         the same length (one sigma), from overlapping batch means of the bin's indicator
         over windows of 10 integrated correlation times of the fine-batch counts (pooled
         over the bins; :mod:`stochastic.errors`), so correlated samples are not counted as
         independent. A bin with no count has se 0 (it says nothing about rare values);
-        ``se_dof``: approximate degrees of freedom of these errors. ``n_eff`` (optional):
+        ``se_dof``: approximate degrees of freedom of these errors. ``min_window``: at least
+        this many samples per window (as :meth:`StreamingMoments.result`). ``n_eff``:
         instead the independent-sample formula sqrt(p (1 - p) / n_eff) / width."""
         if self.counts is None or self.n_total == 0:
             raise ValueError("x: no data fed to the histogram")
@@ -391,7 +392,8 @@ class StreamingHistogram:
             return out
         U = self._bc[:J] / float(self.batch_size)  # fraction of each batch in each bin
         tau, _ = _errors.integrated_time(U)
-        L, dof = _errors.window_for(tau, J)
+        min_L = 1 if min_window is None else int(math.ceil(min_window / self.batch_size))
+        L, dof = _errors.window_for(tau, J, min_L)
         var = np.maximum(_errors.overlapping_batch_variance(U, L), 0.0)
         out.update(density_se=np.sqrt(var / J) / w, se_dof=float(dof),
                    se_batch_samples=int(L * self.batch_size))
@@ -559,7 +561,7 @@ class StreamingMoments:
             rows = rows[k:]
         return self
 
-    def result(self, rho=None) -> dict:
+    def result(self, rho=None, min_window=None) -> dict:
         """mean, std, variance, skewness, kurtosis, p_positive (fraction of samples > 0),
         n and their standard errors ``se_<name>``.
 
@@ -568,8 +570,9 @@ class StreamingMoments:
         ``se_dof`` >= 20). It is computed without a Gaussian assumption, from the
         record's own correlation: each statistic is linearized (influence function), and the
         variance of the mean of that per-sample quantity is estimated by overlapping batch
-        means over windows of 10 integrated correlation times measured on the record
-        (:mod:`stochastic.errors`). ``se_dof``: the smallest approximate degrees of freedom
+        means over windows of 10 integrated correlation times measured on the record, and
+        at least ``min_window`` samples if given (a known slow time scale of the record;
+        :mod:`stochastic.errors`). ``se_dof``: the smallest approximate degrees of freedom
         of these errors (few when the record is short for its correlation time: then the
         errors themselves are rough). ``n_eff_mean`` = variance / se_mean^2 (independent
         samples worth of the mean); ``n_eff_skewness`` = 6 / se_skewness^2 and
@@ -588,7 +591,7 @@ class StreamingMoments:
         out = {"mean": mean, "std": std, "variance": std * std, "skewness": skew,
                "kurtosis": kurt, "p_positive": p_pos, "n": n, "n_batches": self._nbat,
                "batch_size": self.batch_size, "correlation_known": rho is not None}
-        ses, dofs, Ls = self._errors(mean, std)
+        ses, dofs, Ls = self._errors(mean, std, min_window)
         out.update(ses)
         out["se_dof"] = float(min(dofs)) if dofs else 0.0
         out["se_batch_samples"] = int(max(Ls) * self.batch_size) if Ls else 0
@@ -600,8 +603,9 @@ class StreamingMoments:
             out.update(_gaussian_errors(std, n, rho))
         return out
 
-    def _errors(self, mean, std):
+    def _errors(self, mean, std, min_window=None):
         """{se_<statistic>}, degrees of freedom and windows from the fine batches."""
+        min_L = 1 if min_window is None else int(math.ceil(min_window / self.batch_size))
         nan = {f"se_{k}": math.nan for k in STATISTICS + ("p_positive",)}
         J = self._nbat
         if J < 4:
@@ -625,7 +629,7 @@ class StreamingMoments:
                 "p_positive": b[:, 5] / nb}
         ses, dofs, Ls = {}, [], []
         for k, u in rows.items():
-            se, L, dof = _errors.series_se(u)
+            se, L, dof = _errors.series_se(u, min_L)
             ses[f"se_{k}"] = se
             if k != "p_positive":
                 dofs.append(dof)

@@ -271,6 +271,12 @@ class _BlockNoise(Excitation):
         return self.n_fade * self.h
 
     @property
+    def realization_duration(self) -> float:
+        """Span (s) of one block's realization, block + fade: its random line amplitudes hold
+        this long (the slowest time scale of the synthesized process; ~ 1/df)."""
+        return (self.n_block + self.n_fade) * self.h
+
+    @property
     def rms(self) -> float:
         """rms of the synthesized process (u) = sqrt(variance)."""
         return math.sqrt(self.variance)

@@ -128,6 +128,11 @@ def test_moments_gaussian_and_merge():
     assert abs(r["skewness"]) < 4 * r["se_skewness"] and abs(r["kurtosis"] - 3) < 4 * r["se_kurtosis"]
     # merged: the fine batches of both halves are kept for the errors
     assert r["n_batches"] == (70_000 // 64) + (130_000 // 64)
+    # a known slow time scale sets a minimum window (independent samples: same error)
+    r2 = a.result(min_window=6400)
+    assert r2["se_batch_samples"] >= 6400 > r["se_batch_samples"]
+    assert r2["se_dof"] == pytest.approx(1.5 * (r["n_batches"] / 100 - 1))
+    assert r2["se_kurtosis"] == pytest.approx(r["se_kurtosis"], rel=0.3)
 
 
 def _ar1(rng, phi, n, skewed=False):
