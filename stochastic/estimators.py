@@ -226,7 +226,8 @@ class StreamingHistogram:
         self.margin = float(margin)
         if not (math.isfinite(self.margin) and self.margin >= 0):
             raise ValueError(f"margin: must be finite and >= 0, got {margin!r}")
-        if isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer)) or batch_size < 1:
+        if (isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer))
+                or batch_size < 1):
             raise ValueError(f"batch_size: must be an integer >= 1 sample, got {batch_size!r}")
         if (isinstance(max_batches, bool) or not isinstance(max_batches, (int, np.integer))
                 or max_batches < 16 or max_batches % 2):
@@ -325,7 +326,8 @@ class StreamingHistogram:
             below, above = int(np.sum(x < self._edges[0])), int(np.sum(x > self._edges[-1]))
             if below + above:
                 raise ValueError(f"x: {below + above} samples outside the histogram edges "
-                                 f"[{self._edges[0]:.6g}, {self._edges[-1]:.6g}] (on_outside='raise')")
+                                 f"[{self._edges[0]:.6g}, {self._edges[-1]:.6g}] "
+                                 "(on_outside='raise')")
         out = self._count_batches(x)
         if out.sum() and self.on_outside == "raise":  # pragma: no cover - checked above
             raise ValueError(f"x: {int(out.sum())} samples outside the histogram edges "
@@ -354,8 +356,9 @@ class StreamingHistogram:
         rows = self._rows(self.counts.size)
         while self._nbat >= rows:
             self._coarsen()
-        self._bc = np.concatenate([np.zeros((self._bc.shape[0], add_lo), np.int64), self._bc,
-                                   np.zeros((self._bc.shape[0], add_hi), np.int64)], axis=1)[:rows + 1]
+        r = self._bc.shape[0]
+        self._bc = np.concatenate([np.zeros((r, add_lo), np.int64), self._bc,
+                                   np.zeros((r, add_hi), np.int64)], axis=1)[:rows + 1]
 
     def result(self, n_eff=None, min_window=None) -> dict:
         """centres, density (1/units), edges, counts, under/overflow, fraction inside, and
@@ -466,8 +469,10 @@ class StreamingMoments:
     def __init__(self, batch_size=None, *, max_batches=4096):
         if batch_size is None:
             batch_size = 64
-        if isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer)) or batch_size < 1:
-            raise ValueError(f"batch_size: must be an integer >= 1 sample or None, got {batch_size!r}")
+        if (isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer))
+                or batch_size < 1):
+            raise ValueError(f"batch_size: must be an integer >= 1 sample or None, "
+                             f"got {batch_size!r}")
         if (isinstance(max_batches, bool) or not isinstance(max_batches, (int, np.integer))
                 or max_batches < 16 or max_batches % 2):
             raise ValueError(f"max_batches: must be an even integer >= 16, got {max_batches!r}")
@@ -596,9 +601,9 @@ class StreamingMoments:
         out["se_dof"] = float(min(dofs)) if dofs else 0.0
         out["se_batch_samples"] = int(max(Ls) * self.batch_size) if Ls else 0
         v = std * std
-        out["n_eff_mean"] = v / out["se_mean"] ** 2 if out["se_mean"] > 0 else math.inf
-        out["n_eff_skewness"] = 6.0 / out["se_skewness"] ** 2 if out["se_skewness"] > 0 else math.inf
-        out["n_eff_kurtosis"] = 24.0 / out["se_kurtosis"] ** 2 if out["se_kurtosis"] > 0 else math.inf
+        for key, num in (("mean", v), ("skewness", 6.0), ("kurtosis", 24.0)):
+            se = out[f"se_{key}"]
+            out[f"n_eff_{key}"] = num / se ** 2 if se > 0 else math.inf
         if rho is not None:
             out.update(_gaussian_errors(std, n, rho))
         return out

@@ -53,12 +53,12 @@ and offsets are the same in both modes for the same seed.
 Consecutive realizations are joined over the first ``L = fade_duration`` seconds of each
 block by the power-complementary pair ``w_in = sin(pi/2 g(s))``, ``w_out = cos(pi/2 g(s))``,
 ``s = (t - i B)/L``, ``g(s) = s^3 (10 - 15 s + 6 s^2)``: ``w_in^2 + w_out^2 = 1`` keeps the
-variance that of the blocks (``rms^2`` exactly when requested), and ``g' = g'' = 0`` at both ends make ``y, y', y''``
-continuous across joins; ``y' = w' z + w z'`` and ``y'' = w'' z + 2 w' z' + w z''`` are
-exact (product rule). Across a join the covariance at lag tau is
-``R(tau) cos(theta(t) - theta(t + tau))`` instead of ``R(tau)``; averaged over a block this
-smooths the PSD by a kernel of width ~ 1/B Hz (band edges only; a flat band interior is
-unchanged).
+variance that of the blocks (``rms^2`` exactly when requested), and ``g' = g'' = 0`` at
+both ends make ``y, y', y''`` continuous across joins; ``y' = w' z + w z'`` and
+``y'' = w'' z + 2 w' z' + w z''`` are exact (product rule). Across a join the covariance
+at lag tau is ``R(tau) cos(theta(t) - theta(t + tau))`` instead of ``R(tau)``; averaged
+over a block this smooths the PSD by a kernel of width ~ 1/B Hz (band edges only; a flat
+band interior is unchanged).
 
 Grid step and interpolation accuracy
 ------------------------------------
