@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 OK = 0
@@ -151,3 +152,87 @@ def all_finite(x):
         if not math.isfinite(x[j]):
             return j
     return -1
+
+
+@njit(cache=True)
+def batch_sums(x, size, out):
+    """Per-batch sums of consecutive batches of ``size`` samples of ``x`` (x.size a multiple
+    of size): out[k] = [n, mean, M2, M3, M4, n_positive] of batch k (central sums as
+    :func:`block_moments`; n_positive counts samples > 0). Returns NON_FINITE on a bad
+    sample."""
+    buf = np.empty(5)
+    nb = x.size // size
+    for k in range(nb):
+        seg = x[k * size: (k + 1) * size]
+        st = block_moments(seg, buf)
+        if st != OK:
+            return st
+        npos = 0
+        for j in range(seg.size):
+            if seg[j] > 0.0:
+                npos += 1
+        out[k, 0] = buf[0]
+        out[k, 1] = buf[1]
+        out[k, 2] = buf[2]
+        out[k, 3] = buf[3]
+        out[k, 4] = buf[4]
+        out[k, 5] = npos
+    return OK
+
+
+@njit(cache=True)
+def histogram_count_batches(x, edges, uniform, bc, row, fill, size, counts, outside, state):
+    """Count ``x`` into the histogram ``counts`` and into the fine-batch rows ``bc[row:]``
+    (``fill`` samples already in row ``row``; a row holds ``size`` samples), as
+    :func:`histogram_count` does per sample. Stops when the last row of ``bc`` would be
+    reached with a full batch (the caller merges rows and calls again). state (out): [samples
+    consumed, row, fill] (fill may equal size: the caller closes that row). Returns
+    NON_FINITE on a bad sample."""
+    nb = counts.size
+    lo = edges[0]
+    hi = edges[nb]
+    w = (hi - lo) / nb
+    last = bc.shape[0] - 1
+    j = 0
+    n = x.size
+    while j < n:
+        if fill == size:
+            row += 1
+            fill = 0
+            if row == last:
+                break
+        v = x[j]
+        if not math.isfinite(v):
+            return NON_FINITE
+        if v < lo:
+            outside[0] += 1
+        elif v > hi:
+            outside[1] += 1
+        else:
+            if v == hi:
+                k = nb - 1
+            elif uniform:
+                k = int((v - lo) / w)
+                if k > nb - 1:
+                    k = nb - 1
+                while k > 0 and v < edges[k]:
+                    k -= 1
+                while k < nb - 1 and v >= edges[k + 1]:
+                    k += 1
+            else:
+                k = 0
+                b = nb
+                while b - k > 1:
+                    m = (k + b) // 2
+                    if v >= edges[m]:
+                        k = m
+                    else:
+                        b = m
+            counts[k] += 1
+            bc[row, k] += 1
+        fill += 1
+        j += 1
+    state[0] = j
+    state[1] = row
+    state[2] = fill
+    return OK

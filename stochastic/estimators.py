@@ -7,10 +7,12 @@
 - :class:`StreamingHistogram` PDF on fixed-width bins, under/overflow counted, extended
   (never silently dropped).
 - :class:`StreamingMoments` mean, std, skewness, kurtosis (non-excess: Gaussian = 3),
-  merged across blocks by the pairwise formulas of Chan et al. / Pebay; standard errors.
+  fraction of samples > 0, merged across blocks by the pairwise formulas of Chan et al. /
+  Pebay; standard errors from the record's own correlation (:mod:`stochastic.errors`).
 """
 from __future__ import annotations
 
+import copy
 import math
 import warnings
 
@@ -20,6 +22,7 @@ import scipy.fft
 from nlbeam._validate import positive
 
 from . import _kernels
+from . import errors as _errors
 
 __all__ = ["WelchPSD", "StreamingHistogram", "StreamingMoments", "correlation_from_psd",
            "welch_dof"]
@@ -206,10 +209,13 @@ class StreamingHistogram:
     counted as under/overflow with a warning), ``"count"`` (count as under/overflow, warn
     when the result is read) or ``"raise"``. The density is ``counts / (n_total * width)``
     with ``n_total`` including under/overflow, so it integrates to the fraction of samples
-    inside the edges (reported).
+    inside the edges (reported). The counts of consecutive fine batches (``batch_size``
+    samples, doubling when ``max_batches`` are held; the batch table stays below ~16 MB) are
+    kept for standard errors that account for the record's correlation.
     """
 
-    def __init__(self, edges=None, *, bins=100, margin=0.25, on_outside="extend", max_bins=100_000):
+    def __init__(self, edges=None, *, bins=100, margin=0.25, on_outside="extend", max_bins=100_000,
+                 batch_size=256, max_batches=512):
         if on_outside not in ("extend", "count", "raise"):
             raise ValueError(f"on_outside: must be one of 'extend', 'count', 'raise', got {on_outside!r}")
         self.on_outside = on_outside
@@ -220,6 +226,17 @@ class StreamingHistogram:
         self.margin = float(margin)
         if not (math.isfinite(self.margin) and self.margin >= 0):
             raise ValueError(f"margin: must be finite and >= 0, got {margin!r}")
+        if (isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer))
+                or batch_size < 1):
+            raise ValueError(f"batch_size: must be an integer >= 1 sample, got {batch_size!r}")
+        if (isinstance(max_batches, bool) or not isinstance(max_batches, (int, np.integer))
+                or max_batches < 16 or max_batches % 2):
+            raise ValueError(f"max_batches: must be an even integer >= 16, got {max_batches!r}")
+        self.batch_size = int(batch_size)
+        self._max_batches = int(max_batches)
+        self._bc = None     # (rows + 1, bins) counts of the fine batches; row _nbat is filling
+        self._nbat = 0
+        self._bfill = 0
         self.outside = np.zeros(2, dtype=np.int64)
         self.n_total = 0
         self._warned = False
@@ -238,6 +255,50 @@ class StreamingHistogram:
         self.width = float(wd.mean())
         if self.counts is None:
             self.counts = np.zeros(e.size - 1, dtype=np.int64)
+            self._bc = np.zeros((self._rows(e.size - 1) + 1, e.size - 1), dtype=np.int64)
+
+    def _rows(self, nbins):
+        """Rows of the batch table for ``nbins`` bins (even, 16 .. max_batches, <= 2^21 cells)."""
+        r = min(self._max_batches, max(16, (2 ** 21) // max(nbins, 1)))
+        return r - r % 2
+
+    def _coarsen(self):
+        """Merge neighbouring fine batches pairwise (half as many, twice as long); an odd
+        completed batch joins the filling one."""
+        J = self._nbat
+        bc = self._bc
+        pairs = bc[0: J - J % 2: 2] + bc[1: J - J % 2: 2]
+        fill_row = bc[J].copy()
+        if J % 2:
+            fill_row += bc[J - 1]
+            self._bfill += self.batch_size
+        bc[:] = 0
+        bc[: J // 2] = pairs
+        bc[J // 2] = fill_row
+        self._nbat = J // 2
+        self.batch_size *= 2
+
+    def _count_batches(self, x):
+        """Count ``x`` into the totals and the fine-batch rows (compiled), merging rows
+        whenever the table is full; returns [below, above] of this block."""
+        out = np.zeros(2, dtype=np.int64)
+        state = np.zeros(3, dtype=np.int64)
+        j = 0
+        while True:
+            st = _kernels.histogram_count_batches(x[j:], self._edges, self.uniform, self._bc,
+                                                  self._nbat, self._bfill, self.batch_size,
+                                                  self.counts, out, state)
+            if st != 0:  # pragma: no cover - checked before
+                raise ValueError("x: contains non-finite samples")
+            j += int(state[0])
+            self._nbat, self._bfill = int(state[1]), int(state[2])
+            if self._bfill == self.batch_size:
+                self._nbat += 1
+                self._bfill = 0
+            if self._nbat == self._bc.shape[0] - 1:
+                self._coarsen()
+            if j >= x.size:
+                return out
 
     @property
     def edges(self):
@@ -261,11 +322,14 @@ class StreamingHistogram:
             self._set(np.linspace(lo, hi, self.bins + 1))
         if self.uniform and self.on_outside == "extend":
             self._extend_to(float(x.min()), float(x.max()))
-        out = np.zeros(2, dtype=np.int64)
-        st = _kernels.histogram_count(x, self._edges, self.uniform, self.counts, out)
-        if st != 0:  # pragma: no cover - checked above
-            raise ValueError("x: contains non-finite samples")
-        if out.sum() and self.on_outside == "raise":
+        if self.on_outside == "raise":
+            below, above = int(np.sum(x < self._edges[0])), int(np.sum(x > self._edges[-1]))
+            if below + above:
+                raise ValueError(f"x: {below + above} samples outside the histogram edges "
+                                 f"[{self._edges[0]:.6g}, {self._edges[-1]:.6g}] "
+                                 "(on_outside='raise')")
+        out = self._count_batches(x)
+        if out.sum() and self.on_outside == "raise":  # pragma: no cover - checked above
             raise ValueError(f"x: {int(out.sum())} samples outside the histogram edges "
                              f"[{self._edges[0]:.6g}, {self._edges[-1]:.6g}] (on_outside='raise')")
         self.outside += out
@@ -289,12 +353,23 @@ class StreamingHistogram:
         new = np.concatenate([e[0] - w * np.arange(add_lo, 0, -1), e, e[-1] + w * np.arange(1, add_hi + 1)])
         self.counts = np.concatenate([np.zeros(add_lo, np.int64), self.counts, np.zeros(add_hi, np.int64)])
         self._edges = new
+        rows = self._rows(self.counts.size)
+        while self._nbat >= rows:
+            self._coarsen()
+        r = self._bc.shape[0]
+        self._bc = np.concatenate([np.zeros((r, add_lo), np.int64), self._bc,
+                                   np.zeros((r, add_hi), np.int64)], axis=1)[:rows + 1]
 
-    def result(self, n_eff=None) -> dict:
+    def result(self, n_eff=None, min_window=None) -> dict:
         """centres, density (1/units), edges, counts, under/overflow, fraction inside, and
-        the per-bin standard error of the density sqrt(p (1 - p) / n_eff) / width with
-        ``n_eff`` (default n_total: independent samples, an underestimate for correlated
-        records)."""
+        ``density_se``: the standard error of each bin's density over independent records of
+        the same length (one sigma), from overlapping batch means of the bin's indicator
+        over windows of 10 integrated correlation times of the fine-batch counts (pooled
+        over the bins; :mod:`stochastic.errors`), so correlated samples are not counted as
+        independent. A bin with no count has se 0 (it says nothing about rare values);
+        ``se_dof``: approximate degrees of freedom of these errors. ``min_window``: at least
+        this many samples per window (as :meth:`StreamingMoments.result`). ``n_eff``:
+        instead the independent-sample formula sqrt(p (1 - p) / n_eff) / width."""
         if self.counts is None or self.n_total == 0:
             raise ValueError("x: no data fed to the histogram")
         e = self._edges
@@ -302,26 +377,42 @@ class StreamingHistogram:
         n = self.n_total
         p = self.counts / n
         dens = p / w
-        neff = float(n if n_eff is None else n_eff)
         n_out = int(self.outside.sum())
         if n_out and not self._warned:
             warnings.warn(f"histogram: {n_out} of {n} samples fell outside the edges "
                           f"(below {int(self.outside[0])}, above {int(self.outside[1])})",
                           RuntimeWarning, stacklevel=2)
-        return {"centres": 0.5 * (e[1:] + e[:-1]), "density": dens, "edges": e.copy(),
-                "counts": self.counts.copy(), "n_total": n, "n_below": int(self.outside[0]),
-                "n_above": int(self.outside[1]), "fraction_inside": 1.0 - n_out / n,
-                "density_se": np.sqrt(p * (1 - p) / neff) / w, "n_eff": neff}
+        out = {"centres": 0.5 * (e[1:] + e[:-1]), "density": dens, "edges": e.copy(),
+               "counts": self.counts.copy(), "n_total": n, "n_below": int(self.outside[0]),
+               "n_above": int(self.outside[1]), "fraction_inside": 1.0 - n_out / n}
+        if n_eff is not None:
+            neff = float(n_eff)
+            out.update(density_se=np.sqrt(p * (1 - p) / neff) / w, n_eff=neff)
+            return out
+        J = self._nbat
+        if J < 4:
+            out.update(density_se=np.full(p.shape, np.nan), se_dof=0.0, se_batch_samples=0)
+            return out
+        U = self._bc[:J] / float(self.batch_size)  # fraction of each batch in each bin
+        tau, _ = _errors.integrated_time(U)
+        min_L = 1 if min_window is None else int(math.ceil(min_window / self.batch_size))
+        L, dof = _errors.window_for(tau, J, min_L)
+        var = np.maximum(_errors.overlapping_batch_variance(U, L), 0.0)
+        out.update(density_se=np.sqrt(var / J) / w, se_dof=float(dof),
+                   se_batch_samples=int(L * self.batch_size))
+        return out
 
 
 def _merge(a, b):
-    """Pairwise merge of (n, mean, M2, M3, M4) (Chan et al. 1979; Pebay 2008)."""
-    na, ma, M2a, M3a, M4a = a
-    nb, mb, M2b, M3b, M4b = b
-    if na == 0:
-        return tuple(b)
-    if nb == 0:
-        return tuple(a)
+    """Pairwise merge of (n, mean, M2, M3, M4, n_positive) (Chan et al. 1979; Pebay 2008).
+    Elementwise on arrays too (then every n must be > 0)."""
+    na, ma, M2a, M3a, M4a, pa = a
+    nb, mb, M2b, M3b, M4b, pb = b
+    if np.isscalar(na):
+        if na == 0:
+            return tuple(b)
+        if nb == 0:
+            return tuple(a)
     n = na + nb
     d = mb - ma
     dn = d / n
@@ -331,11 +422,16 @@ def _merge(a, b):
           + 3.0 * dn * (na * M2b - nb * M2a))
     M4 = (M4a + M4b + d * dn * dn * dn * na * nb * (na * na - na * nb + nb * nb)
           + 6.0 * dn * dn * (na * na * M2b + nb * nb * M2a) + 4.0 * dn * (na * M3b - nb * M3a))
-    return (n, mean, M2, M3, M4)
+    return (n, mean, M2, M3, M4, pa + pb)
+
+
+_EMPTY = (0, 0.0, 0.0, 0.0, 0.0, 0)
+#: statistics with standard errors, in the order of the influence-function rows
+STATISTICS = ("mean", "variance", "std", "skewness", "kurtosis")
 
 
 def _stats(s):
-    n, mean, M2, M3, M4 = s
+    n, mean, M2, M3, M4 = s[:5]
     var = M2 / n
     std = math.sqrt(var)
     if M2 > 0:
@@ -346,82 +442,149 @@ def _stats(s):
     return mean, std, skew, kurt
 
 
+def _gaussian_errors(std, n, rho):
+    """Standard errors for a stationary *Gaussian* process with autocorrelation ``rho``."""
+    r = np.asarray(rho, dtype=float)[1:]
+    S = [max(1.0 + 2.0 * float(np.sum(r ** k)), 1.0 / n) for k in (1, 2, 3, 4)]
+    return {"se_mean_gaussian": std * math.sqrt(S[0] / n),
+            "se_variance_gaussian": std * std * math.sqrt(2.0 * S[1] / n),
+            "se_skewness_gaussian": math.sqrt(6.0 * S[2] / n),
+            "se_kurtosis_gaussian": math.sqrt(24.0 * S[3] / n)}
+
+
 class StreamingMoments:
-    """One-pass mean, std (ddof=0), skewness sqrt(n) M3 / M2^1.5 and kurtosis n M4 / M2^2
-    (non-excess; as scipy.stats.skew/kurtosis with bias=True, fisher=False).
+    """One-pass mean, std (ddof=0), skewness sqrt(n) M3 / M2^1.5, kurtosis n M4 / M2^2
+    (non-excess; as scipy.stats.skew/kurtosis with bias=True, fisher=False) and the
+    fraction of samples > 0, with standard errors that hold for correlated, non-Gaussian
+    records.
 
     Each block's central sums are computed in a compiled two-pass kernel about a corrected
     mean and merged by the pairwise update formulas, so a mean offset far above the std
-    costs no accuracy. batch_size: if given (samples), the moments of consecutive batches
-    are also kept (a few floats per batch) for model-free batch-means standard errors.
+    costs no accuracy. The same sums are kept for consecutive fine batches of
+    ``batch_size`` samples (default 64; at most ``max_batches`` of them: when full,
+    neighbours merge and the batch size doubles), from which :meth:`result` computes the
+    standard errors as described in :mod:`stochastic.errors`.
     """
 
-    def __init__(self, batch_size=None):
-        self._s = (0, 0.0, 0.0, 0.0, 0.0)
-        if batch_size is not None:
-            if isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer)) or batch_size < 8:
-                raise ValueError(f"batch_size: must be an integer >= 8 samples or None, got {batch_size!r}")
-            batch_size = int(batch_size)
-        self.batch_size = batch_size
-        self._b = (0, 0.0, 0.0, 0.0, 0.0)
-        self._batches = []
-        self._buf = np.empty(5)
+    def __init__(self, batch_size=None, *, max_batches=4096):
+        if batch_size is None:
+            batch_size = 64
+        if (isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer))
+                or batch_size < 1):
+            raise ValueError(f"batch_size: must be an integer >= 1 sample or None, "
+                             f"got {batch_size!r}")
+        if (isinstance(max_batches, bool) or not isinstance(max_batches, (int, np.integer))
+                or max_batches < 16 or max_batches % 2):
+            raise ValueError(f"max_batches: must be an even integer >= 16, got {max_batches!r}")
+        self.batch_size = int(batch_size)
+        self._s = _EMPTY
+        self._cur = _EMPTY
+        self._bat = np.zeros((int(max_batches), 6))
+        self._nbat = 0
 
-    def _block(self, x):
-        st = _kernels.block_moments(x, self._buf)
+    def _sums(self, x, size):
+        out = np.empty((x.size // size, 6))
+        st = _kernels.batch_sums(x, size, out)
         if st != 0:  # pragma: no cover - validated before
             raise ValueError("x: contains non-finite samples")
-        b = self._buf
-        return (int(b[0]), float(b[1]), float(b[2]), float(b[3]), float(b[4]))
+        return out
+
+    def _push(self, rows):
+        k = rows.shape[0]
+        self._bat[self._nbat: self._nbat + k] = rows
+        self._nbat += k
+        if self._nbat == self._bat.shape[0]:
+            self._coarsen()
+
+    def _coarsen(self):
+        """Merge neighbouring batches pairwise: half as many, twice as long."""
+        J = self._nbat - self._nbat % 2
+        a, b = self._bat[0:J:2].T, self._bat[1:J:2].T
+        merged = np.array(_merge(tuple(a), tuple(b))).T
+        tail = self._bat[J: self._nbat].copy()
+        self._bat[:] = 0.0
+        self._bat[: J // 2] = merged
+        self._nbat = J // 2
+        self.batch_size *= 2
+        if tail.size:  # an odd batch out becomes the partial batch
+            self._cur = _merge(tuple(tail[0]), self._cur)
 
     def update(self, x):
         """Feed the samples ``x`` (1-D)."""
         x = _as_block("x", x)
         if x.size == 0:
             return self
-        if self.batch_size is None:
-            self._s = _merge(self._s, self._block(x))
-            return self
-        j = 0
-        while j < x.size:
-            need = self.batch_size - self._b[0]
-            piece = x[j: j + need]
-            s = self._block(piece)
-            self._s = _merge(self._s, s)
-            self._b = _merge(self._b, s)
-            j += piece.size
-            if self._b[0] == self.batch_size:
-                self._batches.append(_stats(self._b))
-                self._b = (0, 0.0, 0.0, 0.0, 0.0)
+        whole = self._sums(x, x.size)[0]
+        self._s = _merge(self._s, tuple(whole))
+        j, n = 0, x.size
+        while j < n:
+            bs = self.batch_size
+            if self._cur[0] > 0 or n - j < bs:
+                take = min(bs - int(self._cur[0]), n - j)
+                piece = x[j: j + take]
+                self._cur = _merge(self._cur, tuple(self._sums(piece, piece.size)[0]))
+                j += take
+                if self._cur[0] == bs:
+                    done, self._cur = self._cur, _EMPTY
+                    self._push(np.array([done], dtype=float))
+            else:
+                k = min((n - j) // bs, self._bat.shape[0] - self._nbat)
+                self._push(self._sums(x[j: j + k * bs], bs))
+                j += k * bs
         return self
 
     @property
     def n(self) -> int:
         return int(self._s[0])
 
+    @property
+    def n_batches(self) -> int:
+        """Completed fine batches held (each ``batch_size`` samples)."""
+        return self._nbat
+
     def sums(self):
         """(n, mean, M2, M3, M4): the merged central sums."""
-        return self._s
+        return self._s[:5]
 
     def merge(self, other: "StreamingMoments"):
-        """Combine with another estimator (e.g. another ensemble member)."""
+        """Combine with another estimator (e.g. another ensemble member): the totals are
+        merged; the fine batches are brought to the larger batch size (sizes must differ by a
+        power of 2) and appended (partial batches are left out of the errors)."""
         self._s = _merge(self._s, other._s)
-        self._batches.extend(other._batches)
+        o = copy.deepcopy(other)
+        while o.batch_size < self.batch_size:
+            o._coarsen()
+        while self.batch_size < o.batch_size:
+            self._coarsen()
+        if o.batch_size != self.batch_size:
+            raise ValueError(f"other: batch sizes {self.batch_size} and {other.batch_size} "
+                             "do not differ by a power of 2")
+        rows = o._bat[: o._nbat]
+        while rows.shape[0]:
+            k = min(rows.shape[0], self._bat.shape[0] - self._nbat)
+            self._push(rows[:k])
+            rows = rows[k:]
         return self
 
-    def result(self, rho=None) -> dict:
-        """mean, std, skewness, kurtosis, n and standard errors.
+    def result(self, rho=None, min_window=None) -> dict:
+        """mean, std, variance, skewness, kurtosis, p_positive (fraction of samples > 0),
+        n and their standard errors ``se_<name>``.
 
-        Gaussian-process standard errors: se_mean = std sqrt(S1/n), se_variance =
-        std^2 sqrt(2 S2/n), se_skewness =
-        sqrt(6 S3/n), se_kurtosis = sqrt(24 S4/n), with S_k = 1 + 2 sum_{j>=1} rho_j^k the
-        correlation sums of the sampled record (rho: autocorrelation coefficients at lags
-        0, 1, ... samples, e.g. from :func:`correlation_from_psd`; None: independent samples,
-        S_k = 1). n_eff_k = n / S_k are reported. With batches (batch_size), batch-means
-        standard errors std(batch values)/sqrt(n_batches) are given too (no Gaussian
-        assumption; valid when a batch is much longer than the correlation time). When the
-        PSD vanishes at f = 0 (band-pass records) S1 -> 0 and se_mean from it is not
-        meaningful; use se_batch_mean.
+        What an error means: ``se_x`` is the standard deviation of the estimate ``x`` over
+        independent records of the same length (one sigma; 95 % is about +-2 se when
+        ``se_dof`` >= 20). It is computed without a Gaussian assumption, from the
+        record's own correlation: each statistic is linearized (influence function), and the
+        variance of the mean of that per-sample quantity is estimated by overlapping batch
+        means over windows of 10 integrated correlation times measured on the record, and
+        at least ``min_window`` samples if given (a known slow time scale of the record;
+        :mod:`stochastic.errors`). ``se_dof``: the smallest approximate degrees of freedom
+        of these errors (few when the record is short for its correlation time: then the
+        errors themselves are rough). ``n_eff_mean`` = variance / se_mean^2 (independent
+        samples worth of the mean); ``n_eff_skewness`` = 6 / se_skewness^2 and
+        ``n_eff_kurtosis`` = 24 / se_kurtosis^2 are the Gaussian-equivalent counts.
+        ``rho``: if the record is known to be a stationary Gaussian process with this
+        autocorrelation (coefficients at lags 0, 1, ... samples), the closed-form
+        Gaussian-process errors are added as ``se_<name>_gaussian`` (not valid otherwise).
         """
         if self.n < 2:
             raise ValueError(f"x: need at least 2 samples for moments, got {self.n}")
@@ -429,21 +592,51 @@ class StreamingMoments:
         if not (math.isfinite(skew) and std > 0):
             raise ValueError("x: the record is constant; skewness and kurtosis are undefined")
         n = self.n
-        if rho is None:
-            S = [1.0, 1.0, 1.0, 1.0]
-        else:
-            r = np.asarray(rho, dtype=float)[1:]
-            S = [1.0 + 2.0 * float(np.sum(r ** k)) for k in (1, 2, 3, 4)]
-            S = [max(s, 1.0 / n) for s in S]
-        out = {"mean": mean, "std": std, "skewness": skew, "kurtosis": kurt, "n": n,
-               "se_mean": std * math.sqrt(S[0] / n), "variance": std * std,
-               "se_variance": std * std * math.sqrt(2.0 * S[1] / n), "se_skewness": math.sqrt(6.0 * S[2] / n),
-               "se_kurtosis": math.sqrt(24.0 * S[3] / n),
-               "n_eff_mean": n / S[0], "n_eff_skewness": n / S[2], "n_eff_kurtosis": n / S[3],
-               "correlation_known": rho is not None, "n_batches": len(self._batches)}
-        if len(self._batches) >= 2:
-            b = np.array(self._batches)
-            se = b.std(axis=0, ddof=1) / math.sqrt(b.shape[0])
-            out.update({"se_batch_mean": float(se[0]), "se_batch_std": float(se[1]),
-                        "se_batch_skewness": float(se[2]), "se_batch_kurtosis": float(se[3])})
+        p_pos = self._s[5] / n
+        out = {"mean": mean, "std": std, "variance": std * std, "skewness": skew,
+               "kurtosis": kurt, "p_positive": p_pos, "n": n, "n_batches": self._nbat,
+               "batch_size": self.batch_size, "correlation_known": rho is not None}
+        ses, dofs, Ls = self._errors(mean, std, min_window)
+        out.update(ses)
+        out["se_dof"] = float(min(dofs)) if dofs else 0.0
+        out["se_batch_samples"] = int(max(Ls) * self.batch_size) if Ls else 0
+        v = std * std
+        for key, num in (("mean", v), ("skewness", 6.0), ("kurtosis", 24.0)):
+            se = out[f"se_{key}"]
+            out[f"n_eff_{key}"] = num / se ** 2 if se > 0 else math.inf
+        if rho is not None:
+            out.update(_gaussian_errors(std, n, rho))
         return out
+
+    def _errors(self, mean, std, min_window=None):
+        """{se_<statistic>}, degrees of freedom and windows from the fine batches."""
+        min_L = 1 if min_window is None else int(math.ceil(min_window / self.batch_size))
+        nan = {f"se_{k}": math.nan for k in STATISTICS + ("p_positive",)}
+        J = self._nbat
+        if J < 4:
+            return nan, [], []
+        b = self._bat[:J]
+        nb = b[:, 0]
+        m2 = std * std
+        n, _, M2, M3, M4 = self._s[:5]
+        m3, m4 = M3 / n, M4 / n
+        # batch means of (x - mean)^p, p = 1..4, from each batch's central sums
+        d = b[:, 1] - mean
+        c2, c3, c4 = b[:, 2] / nb, b[:, 3] / nb, b[:, 4] / nb
+        P1 = d
+        P2 = c2 + d * d
+        P3 = c3 + 3.0 * d * c2 + d ** 3
+        P4 = c4 + 4.0 * d * c3 + 6.0 * d * d * c2 + d ** 4
+        IF2 = P2 - m2
+        rows = {"mean": P1, "variance": IF2, "std": IF2 / (2.0 * std),
+                "skewness": (P3 - m3 - 3.0 * m2 * P1) / m2 ** 1.5 - 1.5 * m3 / m2 ** 2.5 * IF2,
+                "kurtosis": (P4 - m4 - 4.0 * m3 * P1) / (m2 * m2) - 2.0 * m4 / m2 ** 3 * IF2,
+                "p_positive": b[:, 5] / nb}
+        ses, dofs, Ls = {}, [], []
+        for k, u in rows.items():
+            se, L, dof = _errors.series_se(u, min_L)
+            ses[f"se_{k}"] = se
+            if k != "p_positive":
+                dofs.append(dof)
+                Ls.append(L)
+        return ses, dofs, Ls

@@ -1,41 +1,64 @@
-"""Gaussian base-motion excitations synthesized block by block (spectral representation).
+"""Gaussian excitations synthesized block by block (spectral representation).
 
-Units: time s, frequency Hz, displacement m, one-sided PSD m^2/Hz.
+Units: time s, frequency Hz. The excitation's own unit is written u below: m for a base
+motion (the usual case), N for a force-excited system (``nlbeam.System(...,
+excitation_kind="force")``); a one-sided PSD is in u^2/Hz and an rms in u.
 
 Method (Shinozuka's spectral representation, computed by FFT)
 -------------------------------------------------------------
 The record is cut into blocks ``[i B, (i+1) B]`` (``B = block_duration``). Block ``i`` uses
 its own independent realization
 
-    z_i(tau) = sum_k sqrt(2 G(f_k) df) cos(2 pi f_k tau + phi_k),  tau = t - i B,
+    z_i(tau) = sum_k a_k cos(2 pi f_k tau + phi_k),  tau = t - i B,
     f_k = f_lo + (k + u_i) df,  k = 0 .. ceil((f_hi - f_lo)/df) - 1,
 
 with ``phi_k ~ U[0, 2 pi)`` and a random line offset ``u_i ~ U[0, 1)`` drawn from the block's
 own child seed (``SeedSequence(seed, spawn_key=(i,))``), so any block can be regenerated
 alone. ``G`` is zero outside the band. Averaged over ``u_i`` the lines cover every cell
 ``[f_lo + k df, f_lo + (k+1) df)`` uniformly, so the expected PSD of ``z_i`` equals ``G(f)``
-at every frequency (not only at the lines) and its variance equals the integral of ``G``
-over the band; ``z_i`` never repeats within its span (its envelope period ``1/df`` exceeds
-``B + L``). ``z_i`` is evaluated on the grid ``tau_j = j h`` by one complex FFT,
-``z = Re[exp(2 pi i (f_lo + u df) tau) * N ifft(c)]``, together with ``z'`` and ``z''``.
+at every frequency (not only at the lines); ``z_i`` never repeats within its span (its
+envelope period ``1/df`` exceeds ``B + L``).
 
-Amplitudes: by default deterministic, ``sqrt(2 G df)`` (the paper's method): every block's
-line spectrum is the target exactly, so a Welch estimate of the excitation scatters *less*
-than the chi-square law of a Gaussian process, and each sample is Gaussian only through the
-central limit over the lines (kurtosis 3 - 3/(2 n_lines) for equal amplitudes).
-``random_amplitudes=True`` multiplies each amplitude by ``sqrt(E_k)``, ``E_k ~ Exp(1)``
-(Rayleigh amplitudes): then ``z_i`` is exactly a Gaussian process and its estimates scatter
-as chi-square predicts. The phases are the same in both modes for the same seed.
+Synthesis is two steps, kept apart so that a faster evaluation can replace the second
+without touching the statistics: (1) :meth:`components` draws the line spectrum of a block
+(offset, phases, amplitudes, scaling: every statistical property lives here);
+(2) :func:`lines_on_grid` evaluates that line sum and its first two derivatives on the grid
+``tau_j = j h`` (one complex FFT, ``z = Re[exp(2 pi i (f_lo + u df) tau) * N ifft(c)]``).
+
+Line variances and the rms
+--------------------------
+Line k carries the variance ``s_k = G(f_k) df`` (u^2). When an ``rms`` is requested, every
+block's line variances are scaled so that ``sum_k s_k = rms^2`` exactly (to rounding) for
+that block's offset ``u_i``: the variance of the synthesized process is the requested one
+for any PSD (tables, narrow peaks, steep slopes) with no quadrature at all, and the scale
+depends on ``u_i`` only, so the process stays Gaussian. Without ``rms`` the lines carry
+``G(f_k) df`` as given and the variance averaged over ``u`` is the integral of ``G``.
+A PSD with structure narrower than ``df`` (a peak the lines can straddle) makes
+``sum_k s_k`` vary with ``u``: a warning says so (an error if some offset sees no power),
+and a longer ``block_duration`` (df = 1/(block + fade) roughly) resolves it.
+
+Amplitudes: ``amplitudes="random"`` (the default) gives ``a_k = sqrt(2 s_k E_k)`` with
+``E_k ~ Exp(1)`` (Rayleigh amplitudes): ``z_i`` is then exactly a Gaussian process, so the
+response of any linear system is Gaussian at every resonance, however few lines fall
+inside it, and Welch estimates scatter as chi-square predicts. ``amplitudes=
+"deterministic"`` (the paper's method, for reproducing the paper) gives ``a_k =
+sqrt(2 s_k)``: every block's line spectrum is the target exactly, a sample is Gaussian only
+through the central limit over the lines, and a linear response whose resonance spans few
+lines is sub-Gaussian: its kurtosis is low by about ``1.5 sum_k w_k^2 / (sum_k w_k)^2``
+(w_k the response's line variances; ``3 df / (2 pi bw)`` for a resonance of half-power
+bandwidth bw, 0.16 for the paper's beam under 0-200 Hz). ``stochastic.simulate`` warns when
+the line spacing is too coarse for the model's damping (:meth:`kurtosis_bias`). The phases
+and offsets are the same in both modes for the same seed.
 
 Consecutive realizations are joined over the first ``L = fade_duration`` seconds of each
 block by the power-complementary pair ``w_in = sin(pi/2 g(s))``, ``w_out = cos(pi/2 g(s))``,
 ``s = (t - i B)/L``, ``g(s) = s^3 (10 - 15 s + 6 s^2)``: ``w_in^2 + w_out^2 = 1`` keeps the
-variance exactly ``var y = int G``, and ``g' = g'' = 0`` at both ends make ``y, y', y''``
-continuous across joins; ``y' = w' z + w z'`` and ``y'' = w'' z + 2 w' z' + w z''`` are
-exact (product rule). Across a join the covariance at lag tau is
-``R(tau) cos(theta(t) - theta(t + tau))`` instead of ``R(tau)``; averaged over a block this
-smooths the PSD by a kernel of width ~ 1/B Hz (band edges only; a flat band interior is
-unchanged).
+variance that of the blocks (``rms^2`` exactly when requested), and ``g' = g'' = 0`` at
+both ends make ``y, y', y''`` continuous across joins; ``y' = w' z + w z'`` and
+``y'' = w'' z + 2 w' z' + w z''`` are exact (product rule). Across a join the covariance
+at lag tau is ``R(tau) cos(theta(t) - theta(t + tau))`` instead of ``R(tau)``; averaged
+over a block this smooths the PSD by a kernel of width ~ 1/B Hz (band edges only; a flat
+band interior is unchanged).
 
 Grid step and interpolation accuracy
 ------------------------------------
@@ -64,11 +87,16 @@ from nlbeam.excitation import CosineSum, Excitation, Sampled
 
 from . import _kernels
 
-__all__ = ["BandLimitedNoise", "SpectralNoise", "Realization", "Recorded", "hermite_step"]
+__all__ = ["BandLimitedNoise", "SpectralNoise", "Realization", "Recorded", "hermite_step",
+           "lines_on_grid", "AMPLITUDES"]
+
+#: amplitude laws of the block synthesis (see the module doc)
+AMPLITUDES = ("random", "deterministic")
 
 _DEFAULT_INTERP_TOL = 1e-10
 _DEFAULT_BLOCK_SAMPLES = 2 ** 18
 _MAX_TABLE_SAMPLES = 50_000_000
+_N_OFFSETS = 32  # line offsets u sampled to check how well the lines resolve a PSD
 
 
 def hermite_step(f_max, interp_tol=_DEFAULT_INTERP_TOL):
@@ -105,16 +133,55 @@ def _int64_or_str(v):
     return int(v) if v < 2 ** 63 else str(v)
 
 
-class _BlockNoise(Excitation):
-    """Common machinery: block grid, seeds, FFT synthesis, cross-fades. Subclasses provide
-    ``_G(f)`` (target one-sided PSD on the band, vectorized, m^2/Hz) and ``variance``."""
-
-    def _setup(self, band, seed, duration, h, block_duration, fade_duration, interp_tol,
-               random_amplitudes=False):
-        self.band = _check_band(band)
+def _amplitude_law(amplitudes, random_amplitudes):
+    """The amplitude law from ``amplitudes`` ('random' | 'deterministic') and the older
+    boolean ``random_amplitudes`` (kept for existing scripts; None when not given)."""
+    if random_amplitudes is not None:
         if not isinstance(random_amplitudes, (bool, np.bool_)):
             raise ValueError(f"random_amplitudes: must be True or False, got {random_amplitudes!r}")
-        self.random_amplitudes = bool(random_amplitudes)
+        old = "random" if random_amplitudes else "deterministic"
+        if amplitudes is not None and amplitudes != old:
+            raise ValueError(f"amplitudes: {amplitudes!r} contradicts random_amplitudes="
+                             f"{random_amplitudes!r}; give only amplitudes=")
+        return old
+    if amplitudes is None:
+        return "random"
+    if amplitudes not in AMPLITUDES:
+        raise ValueError(f"amplitudes: must be one of {', '.join(map(repr, AMPLITUDES))}, "
+                         f"got {amplitudes!r}")
+    return amplitudes
+
+
+def lines_on_grid(f0, df, coeffs, h, m, n_fft):
+    """The line sum z(tau) = Re sum_k c_k exp(2 pi i (f0 + k df) tau) and its first two
+    derivatives at tau_j = j h, j = 0 .. m - 1 (s): array (3, m) in u, u/s, u/s^2.
+
+    coeffs: complex c_k = a_k exp(i phi_k) (u), k = 0 .. K - 1, K <= n_fft; n_fft h must
+    exceed the span (m - 1) h and equal 1/df. One inverse FFT of length n_fft for the three
+    rows; the carrier exp(2 pi i f0 tau) is applied with its phase reduced mod 1 cycle.
+    This is the inner loop of the block synthesis: any method with the same output to
+    ~1e-12 relative may replace it without changing a statistic."""
+    K = coeffs.size
+    c = np.zeros((3, n_fft), dtype=complex)
+    w = 2.0 * math.pi * (f0 + df * np.arange(K))
+    c[0, :K] = coeffs
+    c[1, :K] = coeffs * (1j * w)
+    c[2, :K] = coeffs * (-w * w)
+    s = scipy.fft.ifft(c, axis=1, overwrite_x=True)[:, :m] * n_fft
+    cyc = np.mod(f0 * h * np.arange(m), 1.0)
+    return (s * np.exp(2j * math.pi * cyc)).real
+
+
+class _BlockNoise(Excitation):
+    """Common machinery: block grid, seeds, line spectra, FFT synthesis, cross-fades.
+    Subclasses provide ``_G(f)`` (target one-sided PSD on the band, vectorized, u^2/Hz),
+    ``variance`` (u^2) and ``_rms_target`` (u, or None: lines carry G df unscaled), then
+    call ``_check_lines()``."""
+
+    def _setup(self, band, seed, duration, h, block_duration, fade_duration, interp_tol,
+               amplitudes=None, random_amplitudes=None):
+        self.band = _check_band(band)
+        self.amplitudes = _amplitude_law(amplitudes, random_amplitudes)
         self.seed = _seed_entropy(seed)
         if duration is not None:
             duration = positive("duration", duration, unit="s")
@@ -151,6 +218,47 @@ class _BlockNoise(Excitation):
         self.n_lines = int(math.ceil((self.band[1] - self.band[0]) / self.df))
         self._cache = OrderedDict()
 
+    @property
+    def random_amplitudes(self) -> bool:
+        """True for Rayleigh amplitudes (``amplitudes == 'random'``)."""
+        return self.amplitudes == "random"
+
+    def _line_frequencies(self, u):
+        """Line frequencies (Hz), shape (number of offsets, n_lines), for the offsets ``u``."""
+        u = np.atleast_1d(np.asarray(u, dtype=float))[:, None]
+        return self.band[0] + (np.arange(self.n_lines) + u) * self.df
+
+    def _raw_line_variances(self, f):
+        """G(f_k) df (u^2, the PSD as given, before any rms scaling) at line frequencies
+        ``f``, zero outside [f_lo, f_hi); checked finite and >= 0."""
+        g = np.zeros(f.shape)
+        inside = (f >= self.band[0]) & (f < self.band[1])
+        g[inside] = self._G(f[inside])
+        if not np.all(np.isfinite(g)) or np.any(g < 0):
+            bad = f[~(np.isfinite(g) & (g >= 0))][0]
+            raise ValueError(f"psd: must be finite and >= 0 on the band, got "
+                             f"{self._G(np.array([bad]))!r} at {bad!r} Hz")
+        return g * self.df
+
+    def _check_lines(self):
+        """How well the lines resolve the PSD: the per-block line variance sum over
+        ``_N_OFFSETS`` offsets u. Raises if some offset sees no power (cannot be scaled to the
+        rms), warns if the sum varies by more than a factor 1.5 (structure narrower than df)."""
+        u = (np.arange(_N_OFFSETS) + 0.5) / _N_OFFSETS
+        tot = self._raw_line_variances(self._line_frequencies(u)).sum(axis=-1)
+        self._offset_sums = tot
+        hint = (f"the PSD has structure narrower than the line spacing df = {self.df:.4g} Hz; "
+                f"give a longer block_duration (now {self.block_duration:.4g} s; df is about "
+                f"1/(block_duration + fade_duration))")
+        if not np.all(tot > 0):
+            raise ValueError(f"psd: some line offsets see no power at all: {hint}")
+        ratio = float(tot.max() / tot.min())
+        if ratio > 1.5:
+            import warnings
+
+            warnings.warn(f"psd: the variance carried by the lines varies by a factor "
+                          f"{ratio:.3g} from block to block: {hint}", RuntimeWarning, stacklevel=3)
+
     # -- public description ------------------------------------------------------------
     @property
     def block_duration(self) -> float:
@@ -163,17 +271,25 @@ class _BlockNoise(Excitation):
         return self.n_fade * self.h
 
     @property
+    def realization_duration(self) -> float:
+        """Span (s) of one block's realization, block + fade: its random line amplitudes hold
+        this long (the slowest time scale of the synthesized process; ~ 1/df)."""
+        return (self.n_block + self.n_fade) * self.h
+
+    @property
     def rms(self) -> float:
-        """Target rms (m) = sqrt(variance)."""
+        """rms of the synthesized process (u) = sqrt(variance)."""
         return math.sqrt(self.variance)
 
     def psd(self, f):
-        """Target one-sided PSD G(f) (m^2/Hz) at the frequencies ``f`` (Hz); 0 outside the band."""
+        """Target one-sided PSD G(f) (u^2/Hz) at the frequencies ``f`` (Hz); 0 outside the
+        band. With a requested rms, each block's lines are scaled by a factor within a
+        fraction of a per cent of 1 for a PSD the lines resolve (see the module doc)."""
         f = np.asarray(f, dtype=float)
         out = np.zeros(f.shape)
         inside = (f >= self.band[0]) & (f <= self.band[1])
         if np.any(inside):
-            out[inside] = self._G(f[inside])
+            out[inside] = self._psd_scale * self._G(f[inside])
         return out
 
     def max_frequency(self) -> float:
@@ -196,29 +312,56 @@ class _BlockNoise(Excitation):
                 "duration": float(self.duration) if self.duration is not None else "none",
                 "h": self.h, "block_duration": self.block_duration,
                 "fade_duration": self.fade_duration, "df_lines": self.df,
-                "interp_tol": self.interp_tol, "random_amplitudes": self.random_amplitudes,
+                "interp_tol": self.interp_tol, "amplitudes": self.amplitudes,
+                "random_amplitudes": self.random_amplitudes,
+                "rms_scaled_per_block": self._rms_target is not None,
                 "method": "spectral-representation blocks, FFT, "
                 "random line offset, sin/cos cross-fades"}
 
     # -- synthesis ------------------------------------------------------------------------
     def components(self, i):
-        """The realization z_i of block ``i``: dict with ``frequencies`` (Hz), ``amplitudes``
-        (m), ``phases`` (rad) referred to the local time ``tau = t - t_ref``, and ``t_ref`` (s)."""
+        """The line spectrum of block ``i``: dict with ``frequencies`` (Hz), ``amplitudes``
+        (u), ``phases`` (rad) referred to the local time ``tau = t - t_ref``, ``t_ref`` (s),
+        ``offset`` u_i, and ``line_variances`` s_k (u^2): the expected variance of each line
+        (a_k^2 / 2 for deterministic amplitudes, its mean for Rayleigh ones). With a requested
+        rms, ``line_variances.sum() == rms**2`` to rounding."""
         i = self._block_index(i)
         rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(i,)))
         u = rng.random()
         phases = 2.0 * math.pi * rng.random(self.n_lines)
-        f = self.band[0] + (np.arange(self.n_lines) + u) * self.df
-        g = self.psd(f)
-        g[f >= self.band[1]] = 0.0
-        if not np.all(np.isfinite(g)) or np.any(g < 0):
-            bad = f[~(np.isfinite(g) & (g >= 0))][0]
-            raise ValueError(f"psd: must be finite and >= 0 on the band, got {self.psd(bad)!r} at {bad!r} Hz")
-        amps = np.sqrt(2.0 * g * self.df)
+        f = self._line_frequencies(u)[0]
+        s = self._raw_line_variances(f)
+        if self._rms_target is not None:
+            s *= self._rms_target ** 2 / s.sum()
+        amps = np.sqrt(2.0 * s)
         if self.random_amplitudes:
             amps *= np.sqrt(rng.standard_exponential(self.n_lines))
         return {"frequencies": f, "amplitudes": amps, "phases": phases,
-                "t_ref": i * self.block_duration, "offset": u}
+                "t_ref": i * self.block_duration, "offset": u, "line_variances": s}
+
+    def kurtosis_bias(self, f_n, zeta):
+        """Predicted bias of the kurtosis of a linear mode's response (natural frequency
+        ``f_n`` Hz, damping ratio ``zeta``) caused by the line spectrum, averaged over the
+        line offsets: ``3 var_u(S)/mean_u(S)^2`` (the response variance S(u) = sum_k w_k
+        changes with the offset: a scale mixture of Gaussians) minus, for deterministic
+        amplitudes, ``1.5 mean_u(sum_k w_k^2 / S^2)`` (a sum of few sinusoids is
+        sub-Gaussian); w_k = s_k / ((f_n^2 - f_k^2)^2 + (2 zeta f_n f_k)^2). An estimate
+        (the cross-fades mix two blocks and roughly halve the second term)."""
+        positive("f_n", f_n, unit="Hz")
+        positive("zeta", zeta)
+        u = (np.arange(_N_OFFSETS) + 0.5) / _N_OFFSETS
+        f = self._line_frequencies(u)
+        s = self._raw_line_variances(f)
+        if self._rms_target is not None:
+            s = s / s.sum(axis=-1, keepdims=True)
+        w = s / ((f_n ** 2 - f ** 2) ** 2 + (2.0 * zeta * f_n * f) ** 2)
+        S = w.sum(axis=-1)
+        if not np.all(S > 0):
+            return math.nan
+        bias = 3.0 * float(np.var(S) / np.mean(S) ** 2)
+        if not self.random_amplitudes:
+            bias -= 1.5 * float(np.mean((w ** 2).sum(axis=-1) / S ** 2))
+        return bias
 
     def _block_index(self, i):
         if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)) or i < 0:
@@ -232,21 +375,9 @@ class _BlockNoise(Excitation):
             self._cache.move_to_end(i)
             return self._cache[i]
         comp = self.components(i)
-        f, a, ph, u = comp["frequencies"], comp["amplitudes"], comp["phases"], comp["offset"]
-        n = self.n_fft
-        m = self.n_block + self.n_fade + 1
-        c = np.zeros((3, n), dtype=complex)
-        ck = a * np.exp(1j * ph)
-        w = 2.0 * math.pi * f
-        c[0, : f.size] = ck
-        c[1, : f.size] = ck * (1j * w)
-        c[2, : f.size] = ck * (-w * w)
-        s = scipy.fft.ifft(c, axis=1, overwrite_x=True)[:, :m] * n
-        fc = self.band[0] + u * self.df
-        # carrier phase in cycles, reduced mod 1 before multiplying by 2 pi
-        cyc = np.mod(fc * self.h * np.arange(m), 1.0)
-        carrier = np.exp(2j * math.pi * cyc)
-        z = (s * carrier).real
+        a, ph, u = comp["amplitudes"], comp["phases"], comp["offset"]
+        z = lines_on_grid(self.band[0] + u * self.df, self.df, a * np.exp(1j * ph), self.h,
+                          self.n_block + self.n_fade + 1, self.n_fft)
         self._cache[i] = z
         while len(self._cache) > 4:
             self._cache.popitem(last=False)
@@ -370,33 +501,33 @@ class _BlockNoise(Excitation):
 class SpectralNoise(_BlockNoise):
     """Zero-mean Gaussian noise with any one-sided PSD on a band.
 
-    psd: callable ``f (Hz, array) -> G (m^2/Hz)``, or a table ``(f, G)`` interpolated
-    linearly (it must cover the band). band: ``(f_lo, f_hi)`` Hz, ``0 <= f_lo < f_hi``.
-    rms: if given (m), the PSD is rescaled so that the variance is ``rms^2``.
+    psd: callable ``f (Hz, array) -> G (u^2/Hz)``, or a table ``(f, G)`` interpolated
+    linearly (it must cover the band); u is the excitation's unit (m for base motion, N for
+    a force). band: ``(f_lo, f_hi)`` Hz, ``0 <= f_lo < f_hi``.
+    rms: if given (u), every block's line variances are scaled to sum to ``rms^2`` exactly
+    (the synthesized process has this rms for any PSD; no quadrature is involved).
     seed: non-negative int (None draws one, reported by ``describe()``).
     duration: record length (s) used by default by ``sampled``/``blocks``/``simulate``.
-    h, block_duration, fade_duration, interp_tol, random_amplitudes: see the module doc.
+    amplitudes: 'random' (default, Rayleigh: a Gaussian process) or 'deterministic' (the
+    paper's method, for reproducing the paper); ``random_amplitudes`` (bool) is the older
+    spelling. h, block_duration, fade_duration, interp_tol: see the module doc.
     """
 
     def __init__(self, psd, band, *, rms=None, seed=None, duration=None, h=None,
                  block_duration=None, fade_duration=None, interp_tol=_DEFAULT_INTERP_TOL,
-                 random_amplitudes=False):
+                 amplitudes=None, random_amplitudes=None):
         self._setup(band, seed, duration, h, block_duration, fade_duration, interp_tol,
-                    random_amplitudes)
+                    amplitudes, random_amplitudes)
         lo, hi = self.band
         if callable(psd):
             self._table_f = None
             self._fn = psd
-            from scipy.integrate import quad
-
             probe = np.linspace(lo, hi, 1001)
             g = np.asarray(psd(probe), dtype=float)
             if g.shape != probe.shape:
                 g = np.broadcast_to(g, probe.shape)
             if not np.all(np.isfinite(g)) or np.any(g < 0):
-                raise ValueError("psd: must return finite values >= 0 (m^2/Hz) on the band")
-            raw_var, _ = quad(lambda f: float(np.asarray(self._fn(np.array([f])), float).ravel()[0]),
-                              lo, hi, limit=500)
+                raise ValueError("psd: must return finite values >= 0 (u^2/Hz) on the band")
         else:
             try:
                 f_tab, g_tab = (np.asarray(a, dtype=float) for a in psd)
@@ -409,23 +540,56 @@ class SpectralNoise(_BlockNoise):
             if np.any(np.diff(f_tab) <= 0):
                 raise ValueError("psd: table frequencies must be strictly increasing")
             if np.any(g_tab < 0):
-                raise ValueError("psd: table values G must be >= 0 m^2/Hz")
+                raise ValueError("psd: table values G must be >= 0 u^2/Hz")
             if f_tab[0] > lo or f_tab[-1] < hi:
                 raise ValueError(f"psd: table covers [{f_tab[0]}, {f_tab[-1]}] Hz, must cover band {self.band}")
             self._table_f = (f_tab, g_tab)
             self._fn = None
+        self._psd_scale = 1.0
+        if rms is not None:
+            rms = positive("rms", rms, unit="(m or N, the excitation's unit)")
+        self._rms_target = rms
+        self._rms_given = rms
+        self._check_lines()
+        raw_var = self._integral()
+        if rms is not None:
+            self._psd_scale = rms * rms / raw_var  # for psd() only: the lines are scaled per block
+            self.variance = rms * rms
+        else:
+            self.variance = raw_var
+
+    def _integral(self):
+        """Integral of the PSD as given over the band (u^2): exact for a table (trapezoid on
+        its knots); for a callable, adaptive quadrature at relative tolerance 1e-11, checked
+        against the mean line variance sum over the offsets (which a peak narrower than the
+        quadrature's sampling cannot escape): if they differ by more than 1 %, the latter."""
+        lo, hi = self.band
+        lines = float(np.mean(self._offset_sums))
+        if self._fn is None:
+            f_tab, g_tab = self._table_f
             inner = f_tab[(f_tab > lo) & (f_tab < hi)]
             knots = np.concatenate([[lo], inner, [hi]])
-            raw_var = float(np.trapezoid(np.interp(knots, f_tab, g_tab), knots))  # exact for linear G
-        if not raw_var > 0:
-            raise ValueError("psd: must have a positive integral over the band")
-        if rms is not None:
-            rms = positive("rms", rms, unit="m")
-            self._scale = rms * rms / raw_var
-        else:
-            self._scale = 1.0
-        self._rms_given = rms
-        self.variance = raw_var * self._scale
+            return float(np.trapezoid(np.interp(knots, f_tab, g_tab), knots))  # exact: linear G
+        import warnings
+
+        from scipy.integrate import IntegrationWarning, quad
+
+        fn = self._fn
+        # the line frequencies of offset 1/2 as breakpoints: quad sees every cell
+        pts = self._line_frequencies(0.5)[0]
+        pts = pts[(pts > lo) & (pts < hi)]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", IntegrationWarning)
+            val = 0.0
+            edges = np.concatenate([[lo], pts[::64], [hi]])
+            for a, b in zip(edges[:-1], edges[1:]):
+                v, _ = quad(lambda f: float(np.asarray(fn(np.array([f])), float).ravel()[0]),
+                            a, b, epsabs=0.0, epsrel=1e-11, limit=200,
+                            points=pts[(pts > a) & (pts < b)] if b - a > 0 else None)
+                val += v
+        if not (val > 0 and abs(val - lines) <= 0.01 * lines):
+            return lines
+        return float(val)
 
     def _G(self, f):
         if self._fn is not None:
@@ -434,7 +598,7 @@ class SpectralNoise(_BlockNoise):
                 g = np.broadcast_to(g, f.shape).copy()
         else:
             g = np.interp(f, *self._table_f)
-        return self._scale * g
+        return g
 
     def describe(self):
         d = super().describe()
@@ -447,18 +611,21 @@ class BandLimitedNoise(_BlockNoise):
     """Zero-mean Gaussian noise, one-sided PSD flat on ``band``, optionally seen through a
     first-order low-pass: ``G(f) = psd_level / (1 + (f/lowpass)^2)`` for f in the band.
 
-    band: ``(f_lo, f_hi)`` Hz, ``0 <= f_lo < f_hi``. Exactly one of ``rms`` (m, of the
-    filtered signal) or ``psd_level`` (m^2/Hz, the flat level before the filter).
-    lowpass: corner frequency (Hz) or None. seed: non-negative int (None draws one).
-    duration: record length (s). h, block_duration, fade_duration, interp_tol,
-    random_amplitudes: see the module doc.
+    band: ``(f_lo, f_hi)`` Hz, ``0 <= f_lo < f_hi``. Exactly one of ``rms`` (u, of the
+    filtered signal; every block's lines are scaled to it exactly) or ``psd_level`` (u^2/Hz,
+    the flat level before the filter); u is the excitation's unit: m for base motion, N for
+    a force-excited system. lowpass: corner frequency (Hz) or None. seed: non-negative int
+    (None draws one). duration: record length (s). amplitudes: 'random' (default, Rayleigh:
+    a Gaussian process) or 'deterministic' (the paper's method, for reproducing the paper);
+    ``random_amplitudes`` (bool) is the older spelling. h, block_duration, fade_duration,
+    interp_tol: see the module doc.
     """
 
     def __init__(self, band, rms=None, psd_level=None, seed=None, lowpass=None, duration=None, *,
                  h=None, block_duration=None, fade_duration=None, interp_tol=_DEFAULT_INTERP_TOL,
-                 random_amplitudes=False):
+                 amplitudes=None, random_amplitudes=None):
         self._setup(band, seed, duration, h, block_duration, fade_duration, interp_tol,
-                    random_amplitudes)
+                    amplitudes, random_amplitudes)
         lo, hi = self.band
         if (rms is None) == (psd_level is None):
             raise ValueError("rms, psd_level: give exactly one of rms (m) or psd_level (m^2/Hz)")
@@ -470,12 +637,15 @@ class BandLimitedNoise(_BlockNoise):
         self.lowpass = lowpass
         self._equiv_band = bw  # integral of |H|^2 over the band (Hz)
         if rms is not None:
-            rms = positive("rms", rms, unit="m")
+            rms = positive("rms", rms, unit="(m or N, the excitation's unit)")
             psd_level = rms * rms / bw
         else:
-            psd_level = positive("psd_level", psd_level, unit="m^2/Hz")
+            psd_level = positive("psd_level", psd_level, unit="(m^2/Hz or N^2/Hz)")
         self.psd_level = float(psd_level)
-        self.variance = self.psd_level * bw
+        self._psd_scale = 1.0
+        self._rms_target = rms
+        self._check_lines()
+        self.variance = rms * rms if rms is not None else self.psd_level * bw
 
     def _G(self, f):
         if self.lowpass is None:

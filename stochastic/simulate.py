@@ -19,7 +19,7 @@ import numpy as np
 from nlbeam._validate import nonnegative, positive
 from nlbeam.vocabulary import CHANNELS
 
-from .estimators import StreamingHistogram, StreamingMoments, WelchPSD, correlation_from_psd
+from .estimators import StreamingHistogram, StreamingMoments, WelchPSD
 
 __all__ = ["simulate", "StochasticResult", "load", "ensemble", "EnsembleResult",
            "default_transient"]
@@ -93,14 +93,23 @@ def _attr(v):
 
 @dataclass
 class StochasticResult:
-    """Statistics of one simulated record.
+    """Statistics of one simulated record (the kept ``duration`` after the ``transient``).
 
     Per channel (``channels``): Welch PSD ``psd(ch) -> (f Hz, P units^2/Hz)`` with its
     chi-square 95 % interval ``psd_interval(ch)`` and ``n_averages`` segments; histogram
-    PDF ``pdf(ch) -> (centres, density)`` with under/overflow counts; ``moments(ch)`` ->
-    dict(mean, std, skewness, kurtosis (non-excess), se_* standard errors, n_eff_*).
-    The moment standard errors use the autocorrelation obtained from the channel's own PSD
-    (Gaussian-process formulas) and, when batches are available, batch means.
+    PDF ``pdf(ch) -> (centres, density)`` with ``density_se`` and under/overflow counts in
+    ``pdf_details(ch)``; ``moments(ch)`` -> dict(mean, std, variance, skewness, kurtosis
+    (non-excess), p_positive = P(channel > 0), their standard errors se_*, se_dof, n_eff_*).
+    Every standard error is one standard deviation of the estimate over independent records
+    of the same length, from the record's own correlation and without a Gaussian
+    assumption (overlapping batch means of the linearized statistic over windows of 10
+    measured correlation times; see ``StreamingMoments.result``, ``stochastic.errors``).
+
+    Counters, all over the kept record: ``n_impacts`` (contact onsets, every element),
+    ``contact_fraction`` (per element, in ``model.contact_elements`` order: the fraction of
+    the kept time spent in contact, from the located onset and end times), so
+    ``n_impacts / duration`` is the impact rate. ``n_impacts_transient``: onsets in the
+    discarded transient. ``n_steps``, ``n_chunks``, ``n_samples``: work over the whole run.
     ``history``: kept time samples (``t`` and channels) or None.
     """
 
@@ -121,6 +130,8 @@ class StochasticResult:
     moment_data: dict = field(default_factory=dict)
     history: dict | None = None
     n_impacts: int = 0
+    n_impacts_transient: int = 0
+    contact_fraction: np.ndarray = field(default_factory=lambda: np.zeros(0))
     n_steps: int = 0
     n_chunks: int = 0
     n_samples: int = 0
@@ -164,7 +175,17 @@ class StochasticResult:
         return dict(self._get(self.pdf_data, ch, "pdf"))
 
     def moments(self, ch="delta"):
-        """dict(mean, std, skewness, kurtosis, se_mean, se_std..., n, n_eff_*) of ``ch``."""
+        """dict(mean, std, variance, skewness, kurtosis, p_positive, se_mean, se_std,
+        se_variance, se_skewness, se_kurtosis, se_p_positive, se_dof, n, n_eff_*) of ``ch``.
+
+        se_x: one standard deviation of x over independent records of this length (about
+        68 % of such records fall within +-se, 95 % within +-2 se when se_dof >= 20), from
+        overlapping batch means of x's influence function over windows of 10 integrated
+        correlation times measured on this record, and at least two realization spans of a
+        block noise (8.8 s for a 200 Hz band: its random line amplitudes hold that long):
+        valid for non-Gaussian, correlated responses. se_dof: approximate degrees of
+        freedom of the errors themselves (about 1.5 (duration / window - 1); below ~10 the
+        errors are rough, use Student's t)."""
         return dict(self._get(self.moment_data, ch, "moments"))
 
     # -- files ------------------------------------------------------------------------
@@ -215,8 +236,16 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     keep_history: (t0, t1) s, keep the samples in that window (memory ~ its length).
     chunk_duration: s per call to the integrator (default: the noise's block or 1 s).
     pdf_bins / pdf_edges: histogram (edges chosen from the first kept chunk if not given).
-    batch_duration: s per batch for batch-means standard errors (default duration/40).
+    batch_duration: s per fine batch of the standard errors (default 64 samples); the
+    batches the errors use are chosen from the measured correlation time (see
+    ``StochasticResult.moments``).
     progress: callable(t_done_s, t_total_s) called after every chunk, or True to print.
+
+    A noise whose line spacing is too coarse for the damping of the model's linear modes
+    (predicted kurtosis bias of a mode's response above 0.01, ``noise.kurtosis_bias``) is
+    reported by a RuntimeWarning and in ``message``. Contact onsets with a non-positive
+    rate and runaways fail the result only inside the kept record; inside the discarded
+    transient they are noted in ``message``.
     """
     import nlbeam
 
@@ -277,9 +306,8 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     if "psd" in outputs and psd_resolution * n_keep * dt < 1.0:
         raise ValueError(f"psd_resolution: {psd_resolution} Hz needs segments of "
                          f"{1 / psd_resolution:.3g} s, longer than duration {n_keep * dt:.3g} s")
-    if batch_duration is None:
-        batch_duration = n_keep * dt / 40.0
-    batch = max(int(round(positive("batch_duration", batch_duration, unit="s") * fs)), 8)
+    batch = 64 if batch_duration is None else max(
+        int(round(positive("batch_duration", batch_duration, unit="s") * fs)), 1)
     if keep_history is not None:
         try:
             h0, h1 = (float(v) for v in keep_history)
@@ -297,24 +325,30 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
         if "psd" in outputs:
             e["psd"] = WelchPSD(fs, psd_resolution)
         if "pdf" in outputs:
-            e["pdf"] = StreamingHistogram(pdf_edges, bins=pdf_bins)
+            e["pdf"] = StreamingHistogram(pdf_edges, bins=pdf_bins, batch_size=batch)
         if "moments" in outputs:
             e["moments"] = StreamingMoments(batch_size=batch)
         est[ch] = e
     hist_parts = {"t": []}
     hist_parts.update({ch: [] for ch in channels})
 
+    spacing_note = _check_line_spacing(model, excitation)
     state, disc = x0, None
     chunk_warnings = {}
-    n_impacts = n_steps = n_chunks = n_samples = 0
+    n_impacts = n_impacts_tr = n_steps = n_chunks = n_samples = 0
     min_spc = 0
-    n_bad_onsets, t_bad_onset = 0, None
-    chunk_std, t_runaway = [], None
+    bad = {"kept": [0, None], "transient": [0, None]}  # onsets with rate <= 0: count, first t
+    chunk_std, t_runaway, t_runaway_tr = [], None, None
+    contact_el = [int(e) for e in model.contact_elements]
+    contact_time = np.zeros(len(contact_el))
     k0 = 0
     while k0 < n_total:
-        k1 = min(k0 + m, n_total)
+        # chunks never straddle the end of the transient: counters split exactly there
+        k1 = min(k0 + m, n_total, n_tr if k0 < n_tr else n_total)
+        kept = k0 >= n_tr
         t_a, t_b = t0 + k0 * dt, t0 + k1 * dt
         exc = _chunk_excitation(excitation, t_a, t_b)
+        disc_a = disc if disc is not None or not kept else _contact_at_start(model, exc, state, t_a)
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
@@ -337,22 +371,30 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
                 ee = ev[ev[:, 1] == e]
                 t_next = np.append(ee[1:, 0], np.inf if tr.disc_end[e, 0] else ee[-1, 0])
                 lasts = t_next - ee[:, 0] > 1e-12 * np.maximum(np.abs(ee[:, 0]), 1.0)
-                bad = (ee[:, 2] == 1) & ~(ee[:, 3] > 0) & lasts
-                if np.any(bad):
-                    n_bad_onsets += int(np.sum(bad))
-                    t1 = float(ee[np.argmax(bad), 0])
-                    t_bad_onset = t1 if t_bad_onset is None else min(t_bad_onset, t1)
+                is_bad = (ee[:, 2] == 1) & ~(ee[:, 3] > 0) & lasts
+                if np.any(is_bad):
+                    b = bad["kept" if kept else "transient"]
+                    b[0] += int(np.sum(is_bad))
+                    t1 = float(ee[np.argmax(is_bad), 0])
+                    b[1] = t1 if b[1] is None else min(b[1], t1)
         # runaway guard: a chunk whose largest excursion of x from its mean exceeds 50 times
         # the median std of the chunks so far has gained energy numerically
         xo = tr.x[:, model.output_dof]
         if xo.size > 1:
             sd = float(np.std(xo))
-            if len(chunk_std) >= 3 and t_runaway is None:
+            if len(chunk_std) >= 3:
                 ref = float(np.median(chunk_std))
                 if not (np.max(np.abs(xo - np.mean(xo))) <= 50.0 * ref):
-                    t_runaway = t_a
+                    if kept and t_runaway is None:
+                        t_runaway = t_a
+                    elif not kept and t_runaway_tr is None:
+                        t_runaway_tr = t_a
             chunk_std.append(sd)
-        n_impacts += tr.n_impacts
+        if kept:
+            n_impacts += tr.n_impacts
+            contact_time += _contact_time(tr, contact_el, disc_a, t_a, t_b)
+        else:
+            n_impacts_tr += tr.n_impacts
         n_steps += tr.n_steps
         n_chunks += 1
         if tr.min_steps_per_contact > 0:
@@ -391,30 +433,43 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
         model_parameters=dict(model.parameters()),
         excitation_description=dict(excitation.describe()),
         nlbeam_version=str(getattr(nlbeam, "__version__", "unknown")))
+    # the line amplitudes of a block noise hold for one realization span: the errors'
+    # windows cover at least two of them (stochastic.errors)
+    span = getattr(excitation, "realization_duration", None)
+    min_window = None if span is None else int(math.ceil(2.0 * span * fs))
     for ch in channels:
         e = est[ch]
-        rho = None
         if "psd" in e:
-            r = e["psd"].result()
-            res.psd_data[ch] = r
-            try:
-                rho = correlation_from_psd(r["psd"], fs, e["psd"].nperseg)
-            except ValueError:
-                rho = None
+            res.psd_data[ch] = e["psd"].result()
         if "pdf" in e:
-            res.pdf_data[ch] = e["pdf"].result()
+            res.pdf_data[ch] = e["pdf"].result(min_window=min_window)
         if "moments" in e:
-            res.moment_data[ch] = e["moments"].result(rho=rho)
+            res.moment_data[ch] = e["moments"].result(min_window=min_window)
     if keep_history is not None:
         res.history = {k: (np.concatenate(v) if v else np.zeros(0)) for k, v in hist_parts.items()}
     res.n_impacts, res.n_steps, res.n_chunks, res.n_samples = n_impacts, n_steps, n_chunks, n_samples
+    res.n_impacts_transient = n_impacts_tr
+    res.contact_fraction = contact_time / (n_keep * dt)
     res.min_steps_per_contact = min_spc
+    notes = []
+    if spacing_note:
+        notes.append(spacing_note)
+    n_tr_bad, t_tr_bad = bad["transient"]
+    if n_tr_bad:
+        notes.append(f"{n_tr_bad} contact onset(s) with penetration rate <= 0 in the discarded "
+                     f"transient (first at t = {t_tr_bad:.9g} s), not in the kept record")
+    if t_runaway_tr is not None:
+        notes.append(f"a large excursion of x in the discarded transient (chunk starting at "
+                     f"t = {t_runaway_tr:.6g} s), not in the kept record")
     if chunk_warnings:
         msgs = [f"{str(w.message)} (in {n} of {n_chunks} chunks; fewest steps in a contact "
                 f"over the run: {min_spc})" for w, n in chunk_warnings.values()]
         res.message = "completed with warnings: " + "; ".join(msgs)
         for (w, n), text in zip(chunk_warnings.values(), msgs):
             warnings.warn(text, w.category, stacklevel=2)
+    if notes:
+        res.message += ("; " if res.message != "completed" else " (") + "; ".join(notes) + (
+            "" if res.message != "completed" else ")")
     if t_runaway is not None:
         text = (f"the response ran away in the chunk starting at t = {t_runaway:.6g} s (an "
                 "excursion of x above 50 times the typical chunk std: energy gained numerically, "
@@ -423,6 +478,7 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
         res.success = False
         res.message = "failed: " + text + ("; " + res.message if res.message != "completed" else "")
         warnings.warn(text, RuntimeWarning, stacklevel=2)
+    n_bad_onsets, t_bad_onset = bad["kept"]
     if n_bad_onsets:
         # a contact onset with delta' <= 0 (a grazing re-entry just after a contact end) makes
         # the Lankarani-Nikravesh damping term change sign and feed energy in: the record is
@@ -443,6 +499,89 @@ def default_transient(model):
     wn = 2 * np.pi * np.min(model.system.natural_frequencies())
     zeta = _min_damping_ratio(model)
     return 10.0 / max(zeta * wn, 1e-3)
+
+
+def _contact_at_start(model, excitation, state, t):
+    """disc rows [in contact, 0] at time t of ``state`` (None: at rest), as integrate's
+    start-in-contact rule (only the in-contact flag is used here)."""
+    N = model.n_dof
+    s0 = np.zeros(2 * N) if state is None else np.asarray(state, dtype=float).ravel()
+    y, yd = excitation.evaluate([t])
+    d, _ = model.penetration(s0, y[0], yd[0])
+    disc = np.zeros((model.n_elements, 2))
+    disc[:, 0] = np.asarray(d, dtype=float).ravel() > 0
+    return disc
+
+
+def _contact_time(tr, elements, disc_a, t_a, t_b):
+    """Time (s) each of ``elements`` spends in contact over the chunk [t_a, t_b] of the
+    trajectory ``tr``, from the located onset/end events (the chunk starts in contact where
+    disc_a[e, 0] != 0). If the event log overflowed, from the stored samples (delta > 0)."""
+    out = np.zeros(len(elements))
+    if not elements:
+        return out
+    n_ev = int(tr.n_events)
+    ev = tr.events[:n_ev] if tr.events is not None else np.zeros((0, 4))
+    if tr.events is None or n_ev > tr.events.shape[0]:
+        inside = tr.delta[:-1, elements] > 0 if tr.delta.shape[0] > 1 else tr.delta[:, elements] > 0
+        return np.mean(inside, axis=0) * (t_b - t_a)
+    for j, e in enumerate(elements):
+        ee = ev[ev[:, 1] == e]
+        start = t_a if disc_a[e, 0] != 0 else None
+        total = 0.0
+        for t, kind in zip(ee[:, 0], ee[:, 2]):
+            if kind == 1:
+                start = t
+            elif start is not None:
+                total += t - start
+                start = None
+        if start is not None and tr.disc_end[e, 0] != 0:
+            total += t_b - start
+        out[j] = total
+    return out
+
+
+def _damped_modes(model):
+    """(f_n Hz, zeta) of the underdamped modes of the linear structure M x'' + C x' + K x
+    (state-space eigenvalues lambda = -zeta w_n +- i w_n sqrt(1 - zeta^2), any damping)."""
+    s = model.system
+    M, C, K = (np.asarray(a, dtype=float) for a in (s.M, s.C, s.K))
+    N = M.shape[0]
+    Mi = np.linalg.inv(M)
+    A = np.block([[np.zeros((N, N)), np.eye(N)], [-Mi @ K, -Mi @ C]])
+    lam = np.linalg.eigvals(A)
+    lam = lam[lam.imag > 1e-9 * np.maximum(np.abs(lam), 1e-300)]
+    wn = np.abs(lam)
+    keep = wn > 0
+    return wn[keep] / (2 * np.pi), -lam.real[keep] / wn[keep]
+
+
+def _check_line_spacing(model, excitation, limit=0.01):
+    """Warn (and return the text) when a block noise's lines are too coarse for the damping
+    of a linear mode of the model: |predicted kurtosis bias of that mode's response| > limit
+    (``excitation.kurtosis_bias``). Returns None when fine or not applicable."""
+    if not hasattr(excitation, "kurtosis_bias"):
+        return None
+    worst = None
+    for f_n, zeta in zip(*_damped_modes(model)):
+        if not zeta > 0:
+            continue
+        b = excitation.kurtosis_bias(f_n, zeta)
+        if math.isfinite(b) and abs(b) > limit and (worst is None or abs(b) > abs(worst[0])):
+            worst = (b, f_n, zeta)
+    if worst is None:
+        return None
+    b, f_n, zeta = worst
+    bw = 2 * zeta * f_n
+    fix = ("use amplitudes='random' (the default) or " if not excitation.random_amplitudes
+           else "")
+    text = (f"noise lines too coarse for the model's damping: line spacing df = "
+            f"{excitation.df:.4g} Hz against the half-power bandwidth {bw:.4g} Hz of the mode at "
+            f"{f_n:.4g} Hz (amplitudes={excitation.amplitudes!r}): the kurtosis of a linear "
+            f"response there is biased by about {b:+.3f}; {fix}give a longer block_duration "
+            f"(df is about 1/(1.5 block_duration)) so that df is well below {bw:.4g} Hz")
+    warnings.warn(text, RuntimeWarning, stacklevel=3)
+    return text
 
 
 def _min_damping_ratio(model):

@@ -32,12 +32,14 @@ def save_stochastic_result(res, path):
                     "t_start": res.t_start, "transient": res.transient,
                     "duration": res.duration, "method": res.method, "seed": res.seed,
                     "nlbeam_version": res.nlbeam_version, "n_impacts": res.n_impacts,
+                    "n_impacts_transient": res.n_impacts_transient,
+                    "contact_fraction": np.asarray(res.contact_fraction, dtype=float),
                     "n_steps": res.n_steps, "n_chunks": res.n_chunks,
                     "n_samples": res.n_samples, "wall_time": res.wall_time,
                     "min_steps_per_contact": res.min_steps_per_contact,
                     "success": res.success, "message": res.message}
             for k, v in meta.items():
-                f.attrs[k] = _attr(v)
+                f.attrs[k] = v if isinstance(v, np.ndarray) else _attr(v)
             g = f.create_group("model")
             for k, v in res.model_parameters.items():
                 g.attrs[k] = _attr(v)
@@ -95,5 +97,7 @@ def load_stochastic_result(path) -> StochasticResult:
             moment_data=stores["moments"], history=hist, n_impacts=a["n_impacts"],
             n_steps=a["n_steps"], n_chunks=a["n_chunks"], n_samples=a["n_samples"],
             min_steps_per_contact=a["min_steps_per_contact"], wall_time=a["wall_time"],
-            success=bool(a["success"]), message=a["message"])
+            success=bool(a["success"]), message=a["message"],
+            n_impacts_transient=a.get("n_impacts_transient", 0),  # absent in older files
+            contact_fraction=np.atleast_1d(np.asarray(a.get("contact_fraction", []), float)))
     return res
