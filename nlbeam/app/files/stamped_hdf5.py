@@ -73,7 +73,10 @@ def _checksums(h):
     h.visititems(lambda name, obj: objs.append((name, obj)))
     for name, obj in sorted(objs, key=lambda t: t[0]):
         if isinstance(obj, h5py.Dataset):
-            sums[name] = hashlib.sha256(_value_bytes(obj[()])).hexdigest()
+            try:
+                sums[name] = hashlib.sha256(_value_bytes(obj[()])).hexdigest()
+            except (OSError, ValueError, TypeError) as err:  # damaged beyond reading
+                sums[name] = f"unreadable: {err}"
         for k in sorted(obj.attrs):
             if name == "/" and k in _STAMP:
                 continue
@@ -179,8 +182,10 @@ def verify_result(h, path, name):
             raise ResultFileError(f"{path}: corrupted: dataset {ds!r} was added after "
                                   "writing", "corrupted")
         if want["datasets"][ds] != have_sums["datasets"][ds]:
-            raise ResultFileError(f"{path}: corrupted: dataset {ds!r} does not match its "
-                                  "checksum (changed after writing)", "corrupted")
+            why = have_sums["datasets"][ds]
+            why = why if why.startswith("unreadable") else "does not match its checksum"
+            raise ResultFileError(f"{path}: corrupted: dataset {ds!r} {why} (changed after "
+                                  "writing)", "corrupted")
     if want["attributes"] != have_sums["attributes"]:
         raise ResultFileError(f"{path}: corrupted: its attributes (metadata) do not match "
                               "their checksum (changed after writing)", "corrupted")
