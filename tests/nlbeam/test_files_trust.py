@@ -322,3 +322,101 @@ def test_the_code_fingerprint_follows_the_source(tmp_path, monkeypatch):
     _CODE.clear()
     assert a != b and code_fingerprint(("fakepkg_ft",)) == a
     assert len(code_fingerprint()) == 16
+
+
+SCENE = """
+[stochastic]
+band = [0.0, 100.0]
+rms = 1e-4
+seed = 1
+duration = 1.5
+transient = 0.1
+psd_resolution = 2.0
+
+[[figure]]
+kind = "psd"
+file = "psd.png"
+"""
+
+
+def _scene_job(tmp_path, text, name):
+    from nlbeam.app.scenes import load_scene, plan
+
+    p = tmp_path / name
+    p.write_text(text)
+    scene = load_scene(p)
+    (job,) = plan(scene, tmp_path / "out")
+    return scene, job
+
+
+def test_a_bom_at_the_start_of_a_scene_is_accepted(tmp_path):
+    from nlbeam.app.scenes import load_scene
+
+    p = tmp_path / "bom.toml"
+    p.write_bytes(b"\xef\xbb\xbf" + SCENE.encode())
+    assert load_scene(p).stochastic["seed"] == 1
+
+
+def test_the_cache_refuses_swapped_truncated_and_empty_entries(tmp_path, monkeypatch):
+    from nlbeam.app.scenes import format_plan, plan, run
+    from nlbeam.app.scenes.run import run_scene, store_result
+
+    scene, job = _scene_job(tmp_path, SCENE, "a.toml")
+    assert job.inputs["code"] == code_fingerprint() and not job.cached and not job.problem
+    store_result(job, _sto())
+    (job,) = plan(scene, tmp_path / "out")
+    assert job.cached and not job.problem
+    other = _sto()
+    other.psd_data["delta"]["psd"] = other.psd_data["delta"]["psd"] * 4.0
+    _, job7 = _scene_job(tmp_path, SCENE.replace("seed = 1", "seed = 7"), "b.toml")
+    store_result(job7, other)
+    assert job7.path != job.path
+    good = open(job.path, "rb").read(), open(job.path[:-3] + ".json").read()
+
+    def problem():
+        (j,) = plan(scene, tmp_path / "out")
+        assert not j.cached
+        return j.problem
+
+    # another valid result swapped in: its bytes are not the recorded ones
+    shutil.copy(job7.path, job.path)
+    assert "differ from the recorded checksum" in problem()
+    # its record swapped in too: the inputs recorded are another scene's
+    shutil.copy(job7.path[:-3] + ".json", job.path[:-3] + ".json")
+    assert "records other inputs" in problem()
+    # truncated, and empty
+    with open(job.path[:-3] + ".json", "w") as fh:
+        fh.write(good[1])
+    with open(job.path, "wb") as fh:
+        fh.write(good[0][:len(good[0]) // 2])
+    assert "differ" in problem()
+    open(job.path, "wb").close()
+    assert problem()
+    # a damaged file whose record was rewritten to match: the file's own checksums
+    raw = bytearray(good[0])
+    with open(job.path, "wb") as fh:
+        fh.write(good[0])
+    with h5py.File(job.path, "r+") as h:
+        off = h["channels/delta/psd/psd"].id.get_offset()
+    raw[off + 3] ^= 0x10
+    with open(job.path, "wb") as fh:
+        fh.write(bytes(raw))
+    from nlbeam.app.scenes.plan import entry_record
+    with open(job.path[:-3] + ".json", "w") as fh:
+        fh.write(entry_record(job.inputs, job.path))
+    assert "dataset 'channels/delta/psd/psd'" in problem()
+    # --dry-run says what it would recompute; run recomputes it with a warning naming it
+    assert "cached entry refused, recomputed" in format_plan(scene, plan(scene, tmp_path
+                                                                         / "out"), "out")
+    monkeypatch.setattr(run, "compute", lambda inputs: _sto())
+    monkeypatch.setattr(run, "write_outputs", lambda *a: [])
+    stale = tmp_path / "out" / ".nlbeam-cache" / ".tmp-dead.h5"
+    stale.write_bytes(b"x")
+    os.utime(stale, (time.time() - 2 * run.STALE_AGE,) * 2)
+    lines = []
+    rep = run_scene(scene, tmp_path / "out", log=lines.append)
+    assert rep.computed == 1
+    assert any("warning: cache entry" in ln and job.path in ln for ln in lines), lines
+    assert not stale.exists()
+    (job,) = plan(scene, tmp_path / "out")
+    assert job.cached
