@@ -205,6 +205,7 @@ def test_a_write_failing_half_way_leaves_nothing_and_raises_one_line(tmp_path, m
         _sto().save(target)
     msg = str(exc.value)
     assert "No space left on device" in msg and str(target) in msg and "\n" not in msg
+    assert exc.value.errno == 28
     assert os.listdir(tmp_path) == ["sto.h5"] and target.read_bytes() == b"previous"
 
 

@@ -97,8 +97,10 @@ def write_bytes_atomic(path, data):
                 os.fsync(fh.fileno())
     except OSError as err:
         why = err.strerror or str(err)
-        raise OSError(err.errno, f"{path}: cannot save ({why}, {len(data)} bytes to "
-                                 "write); nothing was written") from None
+        clean = OSError(f"{path}: cannot save ({why}, {len(data)} bytes to write); nothing "
+                        "was written")
+        clean.errno = err.errno  # str(clean) stays the one line above
+        raise clean from None
     return path
 
 
