@@ -20,7 +20,8 @@ import stochastic
 from continuation.diagram import Bifurcation, Branch, FrequencyResponse
 from nlbeam.app.files import atomic, remove_stale_temporaries
 from nlbeam.app.files.keys import _CODE, code_fingerprint
-from nlbeam.app.files.stamped_hdf5 import LegacyResultWarning, ResultFileError
+from nlbeam.app.files.stamped_hdf5 import (LegacyResultWarning, NewerWriterWarning,
+                                           ResultFileError)
 from stochastic.simulate import StochasticResult
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -122,6 +123,17 @@ def test_an_edited_attribute_is_detected_version_9_included(tmp_path):
         h.attrs["version"] = "9.0.0"  # claims to come from nlbeam 9.0.0
     msg = _refused(continuation.load, p, "corrupted")
     assert "attributes" in msg
+
+
+def test_a_file_from_nlbeam_9_is_not_read_silently(tmp_path, monkeypatch):
+    import nlbeam
+
+    p = tmp_path / "a.h5"
+    monkeypatch.setattr(nlbeam, "__version__", "9.0.0")
+    _frc().save(p)  # a genuine file of format 2 written by nlbeam 9.0.0
+    monkeypatch.undo()
+    with pytest.warns(NewerWriterWarning, match="written by nlbeam 9.0.0"):
+        assert len(continuation.load(p).branches) == 1
 
 
 def test_wrong_kind_names_the_right_loader(tmp_path):

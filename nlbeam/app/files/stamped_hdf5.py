@@ -7,6 +7,8 @@ or read-only disk fails in Python, cleanly) and hands the bytes to ``write_bytes
 result of the other kind, a newer format, a changed dataset or attribute, and a file that
 lacks what its format holds. Files written before this stamp (format 1: no checksums) load
 with a ``LegacyResultWarning``; one whose nlbeam version is newer than this one is refused.
+A stamped file of a known format written by a newer nlbeam loads with a
+``NewerWriterWarning`` (the format version is the contract; the warning says so).
 """
 from __future__ import annotations
 
@@ -23,8 +25,8 @@ import numpy as np
 
 from .atomic import write_bytes_atomic
 
-__all__ = ["ResultFileError", "LegacyResultWarning", "FORMATS", "write_result",
-           "read_result", "verify_result"]
+__all__ = ["ResultFileError", "LegacyResultWarning", "NewerWriterWarning", "FORMATS",
+           "write_result", "read_result", "verify_result"]
 
 # format name -> (current version, what the user calls to load it)
 FORMATS = {"nlbeam.frequency_response": (2, "continuation.load"),
@@ -43,6 +45,10 @@ class ResultFileError(ValueError):
     def __init__(self, message, reason):
         super().__init__(message)
         self.reason = reason
+
+
+class NewerWriterWarning(UserWarning):
+    """A result file of a format this nlbeam reads, written by a newer nlbeam."""
 
 
 class LegacyResultWarning(UserWarning):
@@ -189,6 +195,11 @@ def verify_result(h, path, name):
     if want["attributes"] != have_sums["attributes"]:
         raise ResultFileError(f"{path}: corrupted: its attributes (metadata) do not match "
                               "their checksum (changed after writing)", "corrupted")
+    wrote = _text(h.attrs.get("written_by", ""))
+    if _version_tuple(wrote) > _version_tuple(nlbeam.__version__):
+        warnings.warn(f"{path}: written by {wrote}, this is nlbeam {nlbeam.__version__}: "
+                      f"read as format {version}, which this version knows; update nlbeam "
+                      "for anything the newer one adds", NewerWriterWarning, stacklevel=4)
     return {k: h.attrs[k] for k in h.attrs}
 
 
