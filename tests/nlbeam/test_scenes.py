@@ -98,9 +98,10 @@ def test_rerun_computes_nothing_and_a_new_seed_recomputes_only_the_stochastic_pa
     assert calls == {"frc": 1, "sim": 1} and again.computed == 0
     assert all(j.cached for j in again.jobs)
     assert {k: os.stat(p).st_mtime_ns for k, p in cache.items()} == stamp
-    # the key is exactly the inputs, written beside the result
-    key = json.loads(open(cache["periodic"][:-3] + ".json").read())
-    assert set(key) == {"analysis", "model", "periodic", "version"}
+    # the key is exactly the inputs (and the code), written beside the result with its hash
+    rec = json.loads(open(cache["periodic"][:-3] + ".json").read())
+    assert set(rec) == {"inputs", "result_sha256"}
+    assert set(rec["inputs"]) == {"analysis", "model", "periodic", "code"}
     # a new seed: only the stochastic analysis runs again
     scene.write_text(text.replace("seed = 1", "seed = 2"))
     third = run_scene(scene, out, quiet=True)
@@ -217,7 +218,8 @@ def test_no_stability_where_none_is_shown(tmp_path, monkeypatch):
     assert seen == [False]
     (per,) = [j for j in rep.jobs if j.kind == "periodic"]
     assert per.inputs["periodic"]["stability"] is False
-    assert json.loads(open(per.path[:-3] + ".json").read())["periodic"]["stability"] is False
+    rec = json.loads(open(per.path[:-3] + ".json").read())
+    assert rec["inputs"]["periodic"]["stability"] is False
     rows = list(csv.DictReader(open(out / "peaks.csv")))
     assert rows and all(r["stable"] == "" for r in rows)
     # a diagram figure shows stability: another cache entry, computed with it

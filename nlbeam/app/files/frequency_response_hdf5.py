@@ -13,16 +13,19 @@ import numpy as np
 
 from continuation.diagram import Bifurcation, Branch, FrequencyResponse, Superharmonic
 
-from .atomic import atomic_path
+from .stamped_hdf5 import read_result, write_result
 
 __all__ = ["save_frequency_response", "load_frequency_response"]
 
+FORMAT = "nlbeam.frequency_response"  # and version: see stamped_hdf5.FORMATS
+
 
 def save_frequency_response(frc, path):
-    """Write ``frc`` (a continuation.FrequencyResponse) to HDF5 at ``path`` (atomically: a
-    temporary file in the same folder, then os.replace; the usual file mode under the
-    umask)."""
-    with atomic_path(path, suffix=".h5") as tmp:  # removed (and re-raised) on failure
+    """Write ``frc`` (a continuation.FrequencyResponse) to HDF5 at ``path``: built in
+    memory, stamped with format and checksums, then written atomically (a temporary file in
+    the same folder, then os.replace; the usual file mode under the umask). A failure
+    leaves nothing and raises one OSError line."""
+    with write_result(path, FORMAT) as tmp:  # in memory; stamped; then to disk atomically
         with h5py.File(tmp, "w") as h:
             h.attrs["version"] = frc.version
             h.attrs["amplitude"] = frc.amplitude
@@ -80,11 +83,13 @@ def save_frequency_response(frc, path):
 
 
 def load_frequency_response(path):
-    """Read a continuation.FrequencyResponse written by ``save_frequency_response``."""
+    """Read a continuation.FrequencyResponse written by ``save_frequency_response``, after
+    checking format and checksums (``stamped_hdf5.read_result``: ResultFileError says what
+    is wrong in one line)."""
     def s(v):
         return v.decode() if isinstance(v, bytes) else (v.item() if hasattr(v, "item") else v)
 
-    with h5py.File(path, "r") as h:
+    with read_result(path, FORMAT) as h:
         a = h.attrs
         model = {k[6:]: s(a[k]) for k in a if k.startswith("model.")}
         settings = {k[9:]: s(a[k]) for k in a if k.startswith("settings.")}

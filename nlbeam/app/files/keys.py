@@ -7,7 +7,7 @@ import hashlib
 import json
 import math
 
-__all__ = ["canonical_json", "content_key"]
+__all__ = ["canonical_json", "content_key", "code_fingerprint"]
 
 
 def _plain(v):
@@ -37,3 +37,33 @@ def canonical_json(obj) -> str:
 def content_key(obj, length=16) -> str:
     """Hex SHA-256 (first ``length`` digits) of ``canonical_json(obj)``."""
     return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:length]
+
+
+_CODE = {}
+
+
+def code_fingerprint(packages=("nlbeam", "continuation", "stochastic")) -> str:
+    """Hex SHA-256 (16 digits) of the source of ``packages``: every ``.py`` file's path
+    (relative) and bytes, sorted. Changes whenever the code that computes a result changes,
+    unlike a hand-kept version string (cache keys use it). Packages are located, not
+    imported."""
+    import importlib.util
+    import os
+
+    if packages in _CODE:
+        return _CODE[packages]
+    h = hashlib.sha256()
+    for pkg in packages:
+        spec = importlib.util.find_spec(pkg)
+        for root in (spec.submodule_search_locations or []) if spec else []:
+            files = []
+            for d, dirs, names in os.walk(root):
+                dirs[:] = sorted(x for x in dirs if x != "__pycache__")
+                files += [os.path.join(d, n) for n in names if n.endswith(".py")]
+            for p in sorted(files):
+                h.update(f"{pkg}/{os.path.relpath(p, root)}\0".encode())
+                with open(p, "rb") as fh:
+                    h.update(fh.read())
+                h.update(b"\0")
+    _CODE[packages] = h.hexdigest()[:16]
+    return _CODE[packages]

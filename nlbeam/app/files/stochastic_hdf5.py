@@ -7,7 +7,6 @@ scalars as attributes), ``history`` (the kept samples, if any). None is stored a
 """
 from __future__ import annotations
 
-import os
 
 import h5py
 import numpy as np
@@ -15,19 +14,21 @@ import numpy as np
 from stochastic.simulate import StochasticResult
 from stochastic.simulate import _attr  # the same plain values as the result holds
 
-from .atomic import atomic_path
+from .stamped_hdf5 import read_result, write_result
 
 __all__ = ["save_stochastic_result", "load_stochastic_result"]
 
-_FORMAT = "nlbeam.stochastic.result/1"
+FORMAT = "nlbeam.stochastic.result"  # and version: see stamped_hdf5.FORMATS
 
 
 def save_stochastic_result(res, path):
-    """Write ``res`` (a stochastic.StochasticResult) to HDF5 at ``path`` (temporary file in
-    the same directory, then renamed; the usual file mode under the umask). Returns path."""
-    with atomic_path(path, suffix=".h5") as tmp:  # temporary name, then renamed
+    """Write ``res`` (a stochastic.StochasticResult) to HDF5 at ``path``: built in memory,
+    stamped with format and checksums, then written atomically (temporary file in the same
+    directory, then renamed; the usual file mode under the umask). A failure leaves nothing
+    and raises one OSError line. Returns path."""
+    with write_result(path, FORMAT) as tmp:  # in memory; stamped; then to disk atomically
         with h5py.File(tmp, "w") as f:
-            meta = {"format": _FORMAT, "channels": ",".join(res.channels),
+            meta = {"channels": ",".join(res.channels),
                     "outputs": ",".join(res.outputs), "fs": res.fs, "dt": res.dt,
                     "t_start": res.t_start, "transient": res.transient,
                     "duration": res.duration, "method": res.method, "seed": res.seed,
@@ -63,7 +64,9 @@ def save_stochastic_result(res, path):
 
 
 def load_stochastic_result(path) -> StochasticResult:
-    """Read a stochastic.StochasticResult written by ``save_stochastic_result``."""
+    """Read a stochastic.StochasticResult written by ``save_stochastic_result``, after
+    checking format and checksums (``stamped_hdf5.read_result``: ResultFileError says what
+    is wrong in one line)."""
     def val(v):
         if isinstance(v, bytes):
             v = v.decode()
@@ -71,11 +74,8 @@ def load_stochastic_result(path) -> StochasticResult:
             v = v.item()
         return v
 
-    with h5py.File(os.fspath(path), "r") as f:
+    with read_result(path, FORMAT) as f:
         a = {k: val(v) for k, v in f.attrs.items()}
-        if a.get("format") != _FORMAT:
-            raise ValueError(f"path: {path!r} is not a stochastic result file "
-                             f"(format {a.get('format')!r})")
         stores = {"psd": {}, "pdf": {}, "moments": {}}
         chans = tuple(c for c in a["channels"].split(",") if c)
         for ch in chans:

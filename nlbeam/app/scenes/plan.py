@@ -10,20 +10,24 @@ only the channels, estimators and history the outputs read.
 
 Cache: ``OUT/.nlbeam-cache/<analysis>-<key>.h5`` where key = SHA-256 of the canonical JSON
 of the analysis' inputs (model, its section with defaults filled in, the channels / outputs
-/ history it must produce) and the package version. A sidecar ``.json`` holds that text.
+/ history it must produce) and the code fingerprint (SHA-256 of the packages' source,
+``files.code_fingerprint``: results of other code are never reused). A sidecar ``.json``
+records the inputs and the SHA-256 of the result file; ``check_entry`` verifies both and
+the file's own checksums, so an entry that is corrupted, truncated, empty or another
+result swapped in is marked for recomputation (``Job.problem`` says why).
 """
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 from dataclasses import dataclass
 
-import nlbeam
-
 from .. import defaults
-from ..files import content_key
+from ..files import canonical_json, code_fingerprint, content_key
 from .schema import history_channels, history_window
 
-__all__ = ["CACHE_DIR", "Job", "plan", "format_plan"]
+__all__ = ["CACHE_DIR", "Job", "plan", "format_plan", "check_entry", "entry_record"]
 
 CACHE_DIR = ".nlbeam-cache"
 
@@ -31,7 +35,8 @@ CACHE_DIR = ".nlbeam-cache"
 @dataclass
 class Job:
     """One analysis of one variant: kind 'periodic' or 'stochastic'; inputs: the exact
-    inputs (hashed into key); path: the cache file; cached: the file exists."""
+    inputs (hashed into key); path: the cache file; cached: a verified entry exists;
+    problem: why an existing entry will be recomputed ("" if none)."""
 
     kind: str
     variant: str
@@ -40,6 +45,7 @@ class Job:
     path: str
     cached: bool = False
     description: str = ""
+    problem: str = ""
 
 
 def _model_inputs(spec):
@@ -101,7 +107,7 @@ def plan(scene, out_dir):
         if need_p:
             p = dict(p, stability=stability)
             inputs = {"analysis": "periodic", "model": m, "periodic": p,
-                      "version": nlbeam.__version__}
+                      "code": code_fingerprint()}
             jobs.append(_job("periodic", label, inputs, cache,
                              f"frequency response {p['f_range'][0]:g}-{p['f_range'][1]:g} Hz, "
                              f"A = {p['amplitude']:g} m, orders {p['orders']}"
@@ -111,7 +117,7 @@ def plan(scene, out_dir):
             outputs = sorted(set().union(*chans.values())) if chans else []
             inputs = {"analysis": "stochastic", "model": m, "stochastic": s,
                       "channels": channels, "outputs": outputs, "history": hist,
-                      "version": nlbeam.__version__}
+                      "code": code_fingerprint()}
             jobs.append(_job("stochastic", label, inputs, cache,
                              f"{s['duration']:g} s under band {s['band'][0]:g}-{s['band'][1]:g} Hz"
                              f"{', low-pass %g Hz' % s['lowpass'] if s.get('lowpass') else ''}, "
@@ -120,10 +126,52 @@ def plan(scene, out_dir):
     return jobs
 
 
+def _sha256_file(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def entry_record(inputs, path):
+    """The sidecar text of a cache entry: its inputs and the SHA-256 of its result file."""
+    return canonical_json({"inputs": inputs, "result_sha256": _sha256_file(path)}) + "\n"
+
+
+def check_entry(path, inputs, kind):
+    """Why the cache entry at ``path`` cannot be reused for ``inputs`` ("" when it can):
+    no sidecar, other inputs recorded, file bytes not those recorded, or the result file
+    itself refused (format, checksums)."""
+    from ..files.stamped_hdf5 import ResultFileError, read_result
+
+    side = path[:-3] + ".json"
+    try:
+        with open(side, encoding="utf-8") as fh:
+            rec = json.loads(fh.read())
+        recorded, sha = rec["inputs"], rec["result_sha256"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return f"no valid record of its inputs ({os.path.basename(side)})"
+    if canonical_json(recorded) != canonical_json(inputs):
+        return "it records other inputs (a different result under this key)"
+    try:
+        if _sha256_file(path) != sha:
+            return "its bytes differ from the recorded checksum (changed or swapped)"
+        name = "nlbeam.frequency_response" if kind == "periodic" else \
+            "nlbeam.stochastic.result"
+        with read_result(path, name):
+            pass
+    except (OSError, ResultFileError) as err:
+        return str(err).replace(path + ": ", "")
+    return ""
+
+
 def _job(kind, label, inputs, cache, desc):
     key = content_key(inputs)
     path = os.path.join(cache, f"{kind}-{key}.h5")
-    return Job(kind, label, inputs, key, path, os.path.exists(path), desc)
+    problem = check_entry(path, inputs, kind) if os.path.exists(path) else ""
+    return Job(kind, label, inputs, key, path, os.path.exists(path) and not problem, desc,
+               problem)
 
 
 def format_plan(scene, jobs, out_dir):
@@ -138,6 +186,8 @@ def format_plan(scene, jobs, out_dir):
         first[j.path] = var or " above"
         state = "cached " if j.cached else "compute"
         lines.append(f"  {state} {j.kind}{var}: {j.description}")
+        if j.problem:
+            lines.append(f"          (cached entry refused, recomputed: {j.problem})")
         lines.append(f"          -> {j.path}")
     if not jobs:
         lines.append("  (no analysis needed)")

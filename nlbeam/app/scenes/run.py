@@ -13,13 +13,15 @@ import continuation
 import stochastic
 from stochastic.simulate import default_transient
 
-from ..files import canonical_json, write_text_atomic
+from ..files import remove_stale_temporaries, write_text_atomic
 from ..sweeps import run_jobs
 from .outputs import write_outputs
-from .plan import plan
+from .plan import CACHE_DIR, entry_record, plan
 from .schema import Scene, build_model, build_noise, load_scene
 
-__all__ = ["RunReport", "run_scene", "compute", "load_result", "store_result"]
+__all__ = ["RunReport", "run_scene", "compute", "load_result", "store_result", "STALE_AGE"]
+
+STALE_AGE = 3600.0  # s: older .tmp-* files in the output and cache folders are removed
 
 
 def compute(job_inputs):
@@ -55,14 +57,14 @@ def load_result(job):
 
 
 def store_result(job, result, log=None):
-    """Write ``result`` to the cache file of ``job`` and the inputs beside it (``.json``);
-    log a warning when the analysis reports failure."""
+    """Write ``result`` to the cache file of ``job`` and, beside it (``.json``), its inputs
+    and the SHA-256 of the file; log a warning when the analysis reports failure."""
     if log is not None and getattr(result, "success", True) is False:
         log(f"nlbeam: warning: {job.kind}{' ' + job.variant if job.variant else ''}: "
             f"{getattr(result, 'message', 'failed')}")
     os.makedirs(os.path.dirname(job.path), exist_ok=True)
     result.save(job.path)  # atomic (temporary name, then os.replace)
-    write_text_atomic(job.path[:-3] + ".json", canonical_json(job.inputs) + "\n")
+    write_text_atomic(job.path[:-3] + ".json", entry_record(job.inputs, job.path))
 
 
 @dataclass
@@ -97,6 +99,11 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
     jobs = plan(scene, out_dir)
     if dry_run:
         return RunReport(jobs=jobs, computed=0, wall_time=time.perf_counter() - t0)
+    for folder in (out_dir, os.path.join(out_dir, CACHE_DIR)):  # left by killed runs
+        for p in remove_stale_temporaries(folder, max_age=STALE_AGE):
+            log(f"nlbeam: removed a stale temporary file {p}")
+    for j in {j.path: j for j in jobs if j.problem}.values():
+        log(f"nlbeam: warning: cache entry {j.path}: {j.problem}; recomputing it")
     todo = list({j.path: j for j in jobs if not j.cached}.values())  # equal keys: once
     if todo:
         log(f"nlbeam: {scene.title}: computing {len(todo)} of {len(jobs)} analyses")

@@ -277,6 +277,7 @@ def load_scene(path) -> Scene:
     except OSError as exc:
         raise SceneError(f"{path}: cannot read: {exc.strerror}") from None
     text = raw.decode("utf-8", errors="replace")
+    text = text[1:] if text.startswith("\ufeff") else text  # a UTF-8 BOM (some editors)
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
