@@ -14,10 +14,10 @@ def contact_step(e, v0, a0, sysa, spc):
     free-flight penetration acceleration a0 (m/s^2): the estimated contact duration divided by
     spc. The duration is that of a free mass on the stop, or of a grazing touch, 2 v0 / |a0|,
     when a0 < 0 makes that shorter."""
-    etype = sysa[4]
-    ew = sysa[5]
-    epar = sysa[8]
-    mw = sysa[9]
+    etype = sysa.etype
+    ew = sysa.ew
+    epar = sysa.epar
+    mw = sysa.mw
     winv = 0.0
     for j in range(ew.shape[1]):
         winv += ew[e, j] * mw[e, j]
@@ -39,16 +39,16 @@ def contact_step(e, v0, a0, sysa, spc):
 def contact_rate(t, s, disc, sysa, xc, xp, xtab):
     """Largest rate (1/s) of the contact laws at (t, s): sqrt(stiffness / m_eff) and
     damping / m_eff of every element in contact; explicit steps need rate * h < 0.5."""
-    etype = sysa[4]
+    etype = sysa.etype
     N = s.shape[0] // 2
     y, yd, ydd, st = excite(t, xc, xp, xtab)
     lam = 0.0
     for e in range(etype.shape[0]):
         if disc[e, 0] != 0.0:
             d, dd = kinematics(e, s, y, yd, sysa)
-            f, dfd, dfdd, dfdv = element_force(etype[e], sysa[8][e], d, dd, disc[e, 1], disc[e, 0])
+            f, dfd, dfdd, dfdv = element_force(etype[e], sysa.epar[e], d, dd, disc[e, 1], disc[e, 0])
             winv = 0.0
             for j in range(N):
-                winv += sysa[5][e, j] * sysa[9][e, j]
+                winv += sysa.ew[e, j] * sysa.mw[e, j]
             lam = max(lam, math.sqrt(max(dfd, 0.0) * winv), abs(dfdd) * winv)
     return lam

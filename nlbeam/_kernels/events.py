@@ -116,7 +116,7 @@ def delta_extremum(e, sign, t, h, s, s_new, f0, f1, sysa, xc, xp, xtab):
     """(theta, delta) at the extremum of delta_e within a step, on the quintic dense output;
     sign = +1 for a maximum, -1 for a minimum."""
     N = s.shape[0] // 2
-    ew = sysa[5]
+    ew = sysa.ew
     wx0 = 0.0
     wv0 = 0.0
     wa0 = 0.0
@@ -136,14 +136,14 @@ def delta_extremum(e, sign, t, h, s, s_new, f0, f1, sysa, xc, xp, xtab):
         th = 0.5 * (lo_b + hi_b)
         xw, xwd = hermite5(wx0, wv0, wa0, wx1, wv1, wa1, h, th)
         ym, ydm, yddm, st2 = excite(t + th * h, xc, xp, xtab)
-        if sign * (xwd + sysa[6][e] * ydm) > 0.0:
+        if sign * (xwd + sysa.ewy[e] * ydm) > 0.0:
             lo_b = th
         else:
             hi_b = th
     th = 0.5 * (lo_b + hi_b)
     xw, xwd = hermite5(wx0, wv0, wa0, wx1, wv1, wa1, h, th)
     ym, ydm, yddm, st2 = excite(t + th * h, xc, xp, xtab)
-    return th, xw + sysa[6][e] * ym - sysa[7][e]
+    return th, xw + sysa.ewy[e] * ym - sysa.egap[e]
 
 
 @njit(cache=True, inline="always")
@@ -154,13 +154,13 @@ def _may_cross(e, t, h, s, s_new, disc, sysa, xc, xp, xtab):
     The same expressions as ``_crossing`` and ``kinematics``, so the same decision bit for bit;
     it saves the call (~25 arrays) on the steps where nothing happens, nearly all of them."""
     sign = -1.0 if disc[e, 0] != 0.0 else 1.0
-    ew = sysa[5]
+    ew = sysa.ew
     N = ew.shape[1]
     y0, yd0, st = excite_yyd(t, xc, xp, xtab)
     y1, yd1, st = excite_yyd(t + h, xc, xp, xtab)
-    d1 = sysa[6][e] * y1 - sysa[7][e]
-    dd0 = sysa[6][e] * yd0
-    dd1 = sysa[6][e] * yd1
+    d1 = sysa.ewy[e] * y1 - sysa.egap[e]
+    dd0 = sysa.ewy[e] * yd0
+    dd1 = sysa.ewy[e] * yd1
     for j in range(N):
         d1 += ew[e, j] * s_new[j]
         dd0 += ew[e, j] * s[N + j]
@@ -174,7 +174,7 @@ def _crossing(meth, t, h, s, s_new, f0, f1, P, dvm, disc, e, sysa, xc, xp, xtab,
     """Does element e change contact status within the time step (t, s) -> (t+h, s_new)?
     Returns (tau of the boundary, status); tau < 0 when there is none."""
     N = s.shape[0] // 2
-    ew = sysa[5]
+    ew = sysa.ew
     sign = -1.0 if disc[e, 0] != 0.0 else 1.0
     y0, yd0, ydd0, st = excite(t, xc, xp, xtab)
     y1, yd1, ydd1, st = excite(t + h, xc, xp, xtab)

@@ -50,10 +50,10 @@ def has_event(et):
 @njit(cache=True)
 def kinematics(e, s, y, yd, sysa):
     """(delta, delta') of element e."""
-    ew = sysa[5]
+    ew = sysa.ew
     N = ew.shape[1]
-    d = sysa[6][e] * y - sysa[7][e]
-    dd = sysa[6][e] * yd
+    d = sysa.ewy[e] * y - sysa.egap[e]
+    dd = sysa.ewy[e] * yd
     for j in range(N):
         d += ew[e, j] * s[j]
         dd += ew[e, j] * s[N + j]
@@ -65,14 +65,14 @@ def kinematics(e, s, y, yd, sysa):
 def deriv(t, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, ks, kP, fel):
     """ks = f(t, s); with want_var also kP = J P + (da/d vminus) dvm. fel (ne,) gets the
     element forces. Returns status."""
-    MinvK = sysa[0]
-    MinvC = sysa[1]
-    mek = sysa[2]
-    mec = sysa[3]
-    etype = sysa[4]
-    ew = sysa[5]
-    epar = sysa[8]
-    mw = sysa[9]
+    MinvK = sysa.MinvK
+    MinvC = sysa.MinvC
+    mek = sysa.mek
+    mec = sysa.mec
+    etype = sysa.etype
+    ew = sysa.ew
+    epar = sysa.epar
+    mw = sysa.mw
     N = MinvK.shape[0]
     ne = etype.shape[0]
     y, yd, ydd, st = excite(t, xc, xp, xtab)
@@ -125,13 +125,13 @@ def deriv_plain(t, s, P, dvm, disc, sysa, xc, xp, xtab, ks, kP, fel):
     arguments cost about 30 ns, half of a 1-DOF right-hand side."""
     if _HAS_USER:
         return deriv(t, s, P, dvm, disc, False, sysa, xc, xp, xtab, ks, kP, fel)
-    MinvK = sysa[0]
-    MinvC = sysa[1]
-    mek = sysa[2]
-    mec = sysa[3]
-    etype = sysa[4]
-    epar = sysa[8]
-    mw = sysa[9]
+    MinvK = sysa.MinvK
+    MinvC = sysa.MinvC
+    mek = sysa.mek
+    mec = sysa.mec
+    etype = sysa.etype
+    epar = sysa.epar
+    mw = sysa.mw
     N = MinvK.shape[0]
     ne = etype.shape[0]
     y, yd, st = excite_yyd(t, xc, xp, xtab)
@@ -172,14 +172,14 @@ def _deriv_var_at(y, yd, s, P, dvm, disc, sysa, ks, kP, fel):
     """The body of ``deriv_var`` with the excitation (y, y') given, so that two stages at the
     same time (RK4's 2nd and 3rd) evaluate it once (the same doubles: it is deterministic).
     Without the custom-force hook: callers check _HAS_USER."""
-    MinvK = sysa[0]
-    MinvC = sysa[1]
-    mek = sysa[2]
-    mec = sysa[3]
-    etype = sysa[4]
-    ew = sysa[5]
-    epar = sysa[8]
-    mw = sysa[9]
+    MinvK = sysa.MinvK
+    MinvC = sysa.MinvC
+    mek = sysa.mek
+    mec = sysa.mec
+    etype = sysa.etype
+    ew = sysa.ew
+    epar = sysa.epar
+    mw = sysa.mw
     N = MinvK.shape[0]
     ne = etype.shape[0]
     m = P.shape[1]
@@ -220,9 +220,9 @@ def _deriv_var_at(y, yd, s, P, dvm, disc, sysa, ks, kP, fel):
 def _user_force_terms(t, s, P, want_var, y, yd, sysa, ks, kP):
     """Add M^-1 q of the custom generalised force q(t, x, v, y, y') (N); for the variational
     equations its Jacobian by forward differences (relative step 1e-7)."""
-    upar = sysa[10]
-    uf = sysa[11]
-    Minv = sysa[12]
+    upar = sysa.upar
+    uf = sysa.uf
+    Minv = sysa.Minv
     N = Minv.shape[0]
     for i in range(N):
         uf[0, i] = 0.0

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 
+from .bundles import Outputs, Settings, Start, SystemArrays, Work
 from .codes import DP5, ERR_MAX_STEPS, ERR_STEP_UNDERFLOW, PWL_STOP, RK2, RK4, VMINUS_FLOOR
 from .contact import contact_rate, contact_step
 from .events import _crossing, _may_cross, delta_extremum, hermite5, locate, step_extrema
@@ -20,30 +21,29 @@ def _store(n_stored, t, s, disc, xc, xp, xtab, sysa, out_t, out_s, out_d, out_f)
     integrator's loop, with y'' skipped and the penetration computed in place (the same
     expressions as ``kinematics``): a call with the system's arrays cost ~100 ns a sample."""
     y, yd, st = excite_yyd(t, xc, xp, xtab)
-    etype = sysa[4]
-    ew = sysa[5]
+    etype = sysa.etype
+    ew = sysa.ew
     N = ew.shape[1]
     out_t[n_stored] = t
     for q in range(s.shape[0]):
         out_s[n_stored, q] = s[q]
     for e in range(etype.shape[0]):
-        d = sysa[6][e] * y - sysa[7][e]
-        dd = sysa[6][e] * yd
+        d = sysa.ewy[e] * y - sysa.egap[e]
+        dd = sysa.ewy[e] * yd
         for j in range(N):
             d += ew[e, j] * s[j]
             dd += ew[e, j] * s[N + j]
         out_d[n_stored, e] = d
-        f, a1, a2, a3 = element_force(etype[e], sysa[8][e], d, dd, disc[e, 1], disc[e, 0])
+        f, a1, a2, a3 = element_force(etype[e], sysa.epar[e], d, dd, disc[e, 1], disc[e, 0])
         out_f[n_stored, e] = f
     return n_stored + 1
 
 
 @njit(cache=True, _nrt=True)
-def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_init, max_steps,
-                     s0, disc0, events_on, want_var, P0, dvm0, track_xmax, store_every, graded,
-                     out_t, out_s, out_d, out_f, ev_log,
-                     s_end, disc_end, P_end, dvm_end, xmax, counters, fcounters):
-    """Integrate from t0 to t_end.
+def integrate_kernel(system, xc, xp, xtab, settings, start, outputs):
+    """Integrate from t0 to t_end: ``system``, ``settings``, ``start`` and ``outputs`` are the
+    fields of SystemArrays, Settings, Start and Outputs (bundles.py), (xc, xp, xtab) the
+    excitation. Returns the status.
 
     Fixed-step methods (RK2, RK4) step on the grid t0 + k dt in free flight; inside a contact
     they take steps of (estimated contact duration) / spc, starting from the onset and ignoring
@@ -55,19 +55,15 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
     down to delta = 0 (then polished to round-off): this removes the delta^1.5 singularity of
     the contact force at both boundaries. DP5 controls its error with (rtol, atol); grid samples
     come from dense output. Samples: every store_every-th grid point, t0 and t_end included.
-
-    counters: [n_stored, n_steps, n_rejected, n_rhs, n_impacts, min_steps_per_contact,
-               n_contacts, n_events]
-    fcounters: [t_reached, max |delta| at a landed event]
-    ev_log (cap, 4): [t, element, 1 onset / 0 end, delta' at the boundary] of the first cap events.
     """
-    KAPPA = 0.25
-    etype = sysa[4]
-    N = sysa[0].shape[0]
+    sysa = SystemArrays(*system)
+    cfg = Settings(*settings)
+    st0 = Start(*start)
+    N = sysa.MinvK.shape[0]
     n = 2 * N
-    ne = etype.shape[0]
-    m = P0.shape[1]
-    A, B, BH, Cc = tableau(meth)
+    ne = sysa.etype.shape[0]
+    m = st0.P0.shape[1]
+    A, B, BH, Cc = tableau(cfg.meth)
     ns = B.shape[0]
     KS = np.zeros((ns, n))
     KP = np.zeros((ns, n, m))
@@ -76,10 +72,10 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
     Ptmp = np.zeros((n, m))
     fel = np.zeros(ne)
     err_w = np.zeros(n)
-    s = s0.copy()
-    P = P0.copy()
-    dvm = dvm0.copy()
-    disc = disc0.copy()
+    s = st0.s0.copy()
+    P = st0.P0.copy()
+    dvm = st0.dvm0.copy()
+    disc = st0.disc0.copy()
     s_new = np.zeros(n)
     P_new = np.zeros((n, m))
     s_try = np.zeros(n)
@@ -92,25 +88,33 @@ def integrate_kernel(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h
     from_before = np.zeros(ne, dtype=np.bool_)
     dtc = np.full(ne, np.inf)
     d_sw = np.full(ne, -1.0)     # delta at which the graded exit phase starts (-1: unknown)
-    return _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_init,
-                           max_steps, events_on, want_var, track_xmax, store_every, graded,
-                           out_t, out_s, out_d, out_f, ev_log, s_end, disc_end, P_end, dvm_end,
-                           xmax, counters, fcounters, KS, KP, KT, ytmp, Ptmp, fel, err_w, s, P,
-                           dvm, disc, s_new, P_new, s_try, f0, f1, dummyP, steps_in_contact,
-                           from_before, dtc, d_sw)
+    work = Work(KS=KS, KP=KP, KT=KT, ytmp=ytmp, Ptmp=Ptmp, fel=fel, err_w=err_w, s=s, P=P,
+                dvm=dvm, disc=disc, s_new=s_new, P_new=P_new, s_try=s_try, dummyP=dummyP, f0=f0,
+                f1=f1, steps_in_contact=steps_in_contact, from_before=from_before, dtc=dtc,
+                d_sw=d_sw)
+    return _integrate_loop(sysa, xc, xp, xtab, cfg, Outputs(*outputs), work)
 
 
 @njit(cache=True)
-def _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_init, max_steps,
-                    events_on, want_var, track_xmax, store_every, graded, out_t, out_s, out_d,
-                    out_f, ev_log, s_end, disc_end, P_end, dvm_end, xmax, counters, fcounters,
-                    KS, KP, KT, ytmp, Ptmp, fel, err_w, s, P, dvm, disc, s_new, P_new, s_try, f0,
-                    f1, dummyP, steps_in_contact, from_before, dtc, d_sw):
+def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
     """The body of integrate_kernel, on the work arrays it allocated (no reference counting
-    here: see ``njit``)."""
+    here: see ``njit``): the bundles' fields as local names, then the loop."""
+    meth, t0, t_end, dt, spc = cfg.meth, cfg.t0, cfg.t_end, cfg.dt, cfg.spc
+    rtol, atol, h_init, max_steps = cfg.rtol, cfg.atol, cfg.h_init, cfg.max_steps
+    events_on, want_var, track_xmax = cfg.events_on, cfg.want_var, cfg.track_xmax
+    store_every, graded = cfg.store_every, cfg.graded
+    out_t, out_s, out_d, out_f, ev_log = out.t, out.s, out.delta, out.force, out.ev_log
+    s_end, disc_end, P_end, dvm_end = out.s_end, out.disc_end, out.P_end, out.dvm_end
+    xmax, counters, fcounters = out.xmax, out.counters, out.fcounters
+    KS, KP, KT, ytmp, Ptmp, fel, err_w = (work.KS, work.KP, work.KT, work.ytmp, work.Ptmp,
+                                          work.fel, work.err_w)
+    s, P, dvm, disc, s_new, P_new = work.s, work.P, work.dvm, work.disc, work.s_new, work.P_new
+    s_try, dummyP, f0, f1 = work.s_try, work.dummyP, work.f0, work.f1
+    steps_in_contact, from_before, dtc, d_sw = (work.steps_in_contact, work.from_before,
+                                                work.dtc, work.d_sw)
     KAPPA = 0.25
-    etype = sysa[4]
-    N = sysa[0].shape[0]
+    etype = sysa.etype
+    N = sysa.MinvK.shape[0]
     n = 2 * N
     ne = etype.shape[0]
     m = P.shape[1]
@@ -124,8 +128,8 @@ def _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_
             d, dd = kinematics(e, s, y, yd, sysa)
             winv = 0.0
             for j in range(N):
-                winv += sysa[5][e, j] * sysa[9][e, j]
-            K = sysa[8][e, 0]
+                winv += sysa.ew[e, j] * sysa.mw[e, j]
+            K = sysa.epar[e, 0]
             pot = 0.8 * K * max(d, 0.0) ** 2.5 if etype[e] != PWL_STOP else K * max(d, 0.0) ** 2
             dtc[e] = min(contact_step(e, math.sqrt(dd * dd + pot * winv), 0.0, sysa, spc), dt)
 
@@ -253,7 +257,7 @@ def _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_
                 for _ in range(4):
                     yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
                     d, dd = kinematics(pe, s_new, yv, ydv, sysa)
-                    if d == 0.0 or abs(d) <= 1e-15 * (abs(yv) + abs(sysa[7][pe]) + 1e-300):
+                    if d == 0.0 or abs(d) <= 1e-15 * (abs(yv) + abs(sysa.egap[pe]) + 1e-300):
                         break
                     tau = -d / dd
                     for q in range(n):
@@ -491,17 +495,17 @@ def _integrate_loop(sysa, xc, xp, xtab, meth, t0, t_end, dt, spc, rtol, atol, h_
                 n_imp += 1
                 steps_in_contact[ev] = 0
                 d_sw[ev] = -1.0
-                dd2 = sysa[6][ev] * ydd
+                dd2 = sysa.ewy[ev] * ydd
                 for j in range(N):
-                    dd2 += sysa[5][ev, j] * f0[N + j]
+                    dd2 += sysa.ew[ev, j] * f0[N + j]
                 dtc[ev] = contact_step(ev, disc[ev, 1], dd2, sysa, spc)
                 if fixed and dtc[ev] > dt:
                     dtc[ev] = dt  # a soft contact never gets a longer step than free flight
                 if want_var:
                     # sensitivity of the onset velocity: d vminus = [0,w] P + delta'' dt_e,
                     # dt_e = -([w,0] P) / delta'
-                    ew = sysa[5]
-                    dd2 = sysa[6][ev] * ydd
+                    ew = sysa.ew
+                    dd2 = sysa.ewy[ev] * ydd
                     for j in range(N):
                         dd2 += ew[ev, j] * f0[N + j]
                     for c in range(m):
