@@ -44,6 +44,7 @@ def step_extrema(s0, f0, s1, f1, h, N, xmax):
         if v0 * v1 < 0.0:
             lo = 0.0
             hi = 1.0
+            # bisection on the sign of x', from where the linear interpolant of v vanishes
             th = v0 / (v0 - v1)
             for _ in range(60):
                 x, xd = hermite5(s0[i], v0, f0[N + i], s1[i], v1, f1[N + i], h, th)
@@ -51,7 +52,6 @@ def step_extrema(s0, f0, s1, f1, h, N, xmax):
                     lo = th
                 else:
                     hi = th
-                # Newton on x' with the second derivative by a secant of the interpolant
                 if hi - lo < 1e-15:
                     break
                 th = 0.5 * (lo + hi)
@@ -173,8 +173,6 @@ def _crossing(meth, t, h, s, s_new, f0, f1, P, dvm, disc, e, sysa, xc, xp, xtab,
               s_try, dummyP, KS, KP, ytmp, Ptmp, fel, err_w):
     """Does element e change contact status within the time step (t, s) -> (t+h, s_new)?
     Returns (tau of the boundary, status); tau < 0 when there is none."""
-    N = s.shape[0] // 2
-    ew = sysa.ew
     sign = -1.0 if disc[e, 0] != 0.0 else 1.0
     y0, yd0, ydd0, st = excite(t, xc, xp, xtab)
     y1, yd1, ydd1, st = excite(t + h, xc, xp, xtab)

@@ -2,7 +2,8 @@
 and in u = sqrt(delta) (exit), which remove the delta^1.5 singularity of the contact force."""
 import math
 
-from .codes import _R3, _R6, ERR_EVENT, ERR_NONFINITE, RK4
+from .codes import (_R3, _R6, _RA21, _RA31, _RA32, _RA41, _RA42, _RA43, _RC1, _RC2, _RC3, _RC4,
+                    ERR_EVENT, ERR_NONFINITE, RK4)
 from .excite import excite, excite_yyd
 from .field import deriv, deriv_plain, deriv_var, kinematics
 from .hook import _HAS_USER, njit
@@ -47,7 +48,7 @@ def _rk_step_graded4(mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, want_var, sy
     n = s.shape[0]
     m = P.shape[1]
     # stage 1 at (u0, s, P)
-    ui = u0 + 0.0 * hu
+    ui = u0 + _RC1 * hu
     ti = t_ref + ui * ui if mode == 1 else tcur
     st, sc = _graded_stage(mode, ui, ti, e, s, P, dvm, disc, want_var, sysa, xc, xp, xtab,
                               KS[0], KP[0], fel)
@@ -55,36 +56,36 @@ def _rk_step_graded4(mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, want_var, sy
         return st, tcur
     KT[0] = sc
     # stage 2
-    _stage_var(s, P, hu, 0.5, KS[0], KP[0], ytmp, Ptmp, want_var)
-    ui = u0 + 0.5 * hu
-    ti = t_ref + ui * ui if mode == 1 else tcur + hu * 0.5 * KT[0]
+    _stage_var(s, P, hu, _RA21, KS[0], KP[0], ytmp, Ptmp, want_var)
+    ui = u0 + _RC2 * hu
+    ti = t_ref + ui * ui if mode == 1 else tcur + hu * _RA21 * KT[0]
     st, sc = _graded_stage(mode, ui, ti, e, ytmp, Ptmp, dvm, disc, want_var, sysa, xc, xp,
                               xtab, KS[1], KP[1], fel)
     if st != 0:
         return st, tcur
     KT[1] = sc
     # stage 3
-    _stage_var(s, P, hu, 0.5, KS[1], KP[1], ytmp, Ptmp, want_var)
-    ui = u0 + 0.5 * hu
+    _stage_var(s, P, hu, _RA32, KS[1], KP[1], ytmp, Ptmp, want_var)
+    ui = u0 + _RC3 * hu
     if mode == 1:
         ti = t_ref + ui * ui
     else:
-        ti = tcur + hu * 0.0 * KT[0]
-        ti += hu * 0.5 * KT[1]
+        ti = tcur + hu * _RA31 * KT[0]
+        ti += hu * _RA32 * KT[1]
     st, sc = _graded_stage(mode, ui, ti, e, ytmp, Ptmp, dvm, disc, want_var, sysa, xc, xp,
                               xtab, KS[2], KP[2], fel)
     if st != 0:
         return st, tcur
     KT[2] = sc
     # stage 4
-    _stage_var(s, P, hu, 1.0, KS[2], KP[2], ytmp, Ptmp, want_var)
-    ui = u0 + 1.0 * hu
+    _stage_var(s, P, hu, _RA43, KS[2], KP[2], ytmp, Ptmp, want_var)
+    ui = u0 + _RC4 * hu
     if mode == 1:
         ti = t_ref + ui * ui
     else:
-        ti = tcur + hu * 0.0 * KT[0]
-        ti += hu * 0.0 * KT[1]
-        ti += hu * 1.0 * KT[2]
+        ti = tcur + hu * _RA41 * KT[0]
+        ti += hu * _RA42 * KT[1]
+        ti += hu * _RA43 * KT[2]
     st, sc = _graded_stage(mode, ui, ti, e, ytmp, Ptmp, dvm, disc, want_var, sysa, xc, xp,
                               xtab, KS[3], KP[3], fel)
     if st != 0:

@@ -180,7 +180,6 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
         ev = -1
         tau_ev = 0.0
         hit_grid = False
-        landed = False
         enter_exit = False
         if phase == 2:
             y, yd, ydd, st = excite(t, xc, xp, xtab)
@@ -208,13 +207,15 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
                 hs = math.sqrt(t_end - g_t0) - g_u
                 cut = True
             st, t_new = rk_step_graded(meth, 1, g_u, hs, g_t0, pe, s, t, P, dvm, disc, want_var,
-                                       sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel)
+                                       sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp,
+                                       fel)
             n_rhs += ns
             if cut:
                 t_new = t_end
             ok = st == 0
             if ok:
-                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
+                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0],
+                           fel)
                 n_rhs += 1
                 yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
                 for e in range(ne):
@@ -234,7 +235,8 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
             if g_u - hu < 1e-9 * g_h:
                 hu = g_u
             st, t_new = rk_step_graded(meth, 2, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, want_var,
-                                       sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel)
+                                       sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp,
+                                       fel)
             n_rhs += ns
             if st != 0 or t_new > t_end or t_new <= t:
                 phase = 0  # the record ends inside the exit phase (or it failed): time steps
@@ -287,7 +289,6 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
                                KP[0], fel)
                 ev = pe
                 tau_ev = t_new - t
-                landed = True
                 phase = 0
         else:
             # ---- an ordinary step in time
@@ -407,7 +408,8 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
                     break
                 t_new = t + tau_ev
                 hit_grid = False
-                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
+                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0],
+                           fel)
                 n_rhs += 1
         # ---- accept the step (t, s) -> (t_new, s_new)
         n_steps += 1

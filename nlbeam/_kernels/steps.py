@@ -5,7 +5,8 @@ import math
 from .codes import (_A_DP5, _A_RK2, _A_RK4, _B_DP5, _B_RK2, _B_RK4, _BH_DP5, _C_DP5, _C_RK2,
                     _C_RK4, _D21, _D31, _D32, _D41, _D42, _D43, _D51, _D52, _D53, _D54, _D61,
                     _D62, _D63, _D64, _D65, _DB1, _DB3, _DB4, _DB5, _DB6, _DC2, _DC3, _DC4, _DC5,
-                    _DE1, _DE3, _DE4, _DE5, _DE6, _DE7, _R3, _R6, DP5, ERR_NONFINITE, RK2, RK4)
+                    _DC6, _DC7, _DE1, _DE3, _DE4, _DE5, _DE6, _DE7, _R3, _R6, _RA21, _RA32, _RA43,
+                    _RC1, _RC2, _RC3, _RC4, DP5, ERR_NONFINITE, RK2, RK4)
 from .excite import excite_yyd
 from .field import _deriv_var_at, deriv, deriv_plain, deriv_var
 from .hook import _HAS_USER, njit
@@ -31,18 +32,18 @@ def _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, K
         KS[0, q] = f0[q]
     if meth == RK4:
         for q in range(n):
-            ytmp[q] = s[q] + h * 0.5 * KS[0, q]
-        st = deriv_plain(t + 0.5 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[1], KP[1], fel)
+            ytmp[q] = s[q] + h * _RA21 * KS[0, q]
+        st = deriv_plain(t + _RC2 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[1], KP[1], fel)
         if st != 0:
             return st
         for q in range(n):
-            ytmp[q] = s[q] + h * 0.5 * KS[1, q]
-        st = deriv_plain(t + 0.5 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[2], KP[2], fel)
+            ytmp[q] = s[q] + h * _RA32 * KS[1, q]
+        st = deriv_plain(t + _RC3 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[2], KP[2], fel)
         if st != 0:
             return st
         for q in range(n):
-            ytmp[q] = s[q] + h * 1.0 * KS[2, q]
-        st = deriv_plain(t + 1.0 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[3], KP[3], fel)
+            ytmp[q] = s[q] + h * _RA43 * KS[2, q]
+        st = deriv_plain(t + _RC4 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[3], KP[3], fel)
         if st != 0:
             return st
         for q in range(n):
@@ -87,7 +88,7 @@ def _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, K
         acc += h * _D63 * KS[2, q]
         acc += h * _D64 * KS[3, q]
         ytmp[q] = acc + h * _D65 * KS[4, q]
-    st = deriv_plain(t + 1.0 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[5], KP[5], fel)
+    st = deriv_plain(t + _DC6 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[5], KP[5], fel)
     if st != 0:
         return st
     for q in range(n):
@@ -100,7 +101,7 @@ def _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, K
         s_out[q] = acc
         if not math.isfinite(acc):
             return ERR_NONFINITE
-    st = deriv_plain(t + 1.0 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[6], KP[6], fel)
+    st = deriv_plain(t + _DC7 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[6], KP[6], fel)
     if st != 0:
         return st
     for q in range(n):
@@ -136,28 +137,29 @@ def _rk_step_var(t, h, s, P, dvm, disc, sysa, xc, xp, xtab, s_out, P_out, KS, KP
     differ in sign). Stage 1 is evaluated, not taken from f0 (as in rk_step)."""
     n = s.shape[0]
     m = P.shape[1]
-    st = deriv_var(t + 0.0 * h, s, P, dvm, disc, sysa, xc, xp, xtab, KS[0], KP[0], fel)
+    st = deriv_var(t + _RC1 * h, s, P, dvm, disc, sysa, xc, xp, xtab, KS[0], KP[0], fel)
     if st != 0:
         return st
-    _stage_var(s, P, h, 0.5, KS[0], KP[0], ytmp, Ptmp, True)
+    _stage_var(s, P, h, _RA21, KS[0], KP[0], ytmp, Ptmp, True)
     if _HAS_USER:
-        st = deriv_var(t + 0.5 * h, ytmp, Ptmp, dvm, disc, sysa, xc, xp, xtab, KS[1], KP[1], fel)
+        st = deriv_var(t + _RC2 * h, ytmp, Ptmp, dvm, disc, sysa, xc, xp, xtab, KS[1], KP[1], fel)
         if st != 0:
             return st
-        _stage_var(s, P, h, 0.5, KS[1], KP[1], ytmp, Ptmp, True)
-        st = deriv_var(t + 0.5 * h, ytmp, Ptmp, dvm, disc, sysa, xc, xp, xtab, KS[2], KP[2], fel)
+        _stage_var(s, P, h, _RA32, KS[1], KP[1], ytmp, Ptmp, True)
+        st = deriv_var(t + _RC3 * h, ytmp, Ptmp, dvm, disc, sysa, xc, xp, xtab, KS[2], KP[2], fel)
         if st != 0:
             return st
     else:
-        # stages 2 and 3 at the same time t + h/2: the excitation once
-        y, yd, st = excite_yyd(t + 0.5 * h, xc, xp, xtab)
+        # stages 2 and 3 at the same time t + c2 h (c2 = c3, codes.check_unrolled): the
+        # excitation once
+        y, yd, st = excite_yyd(t + _RC2 * h, xc, xp, xtab)
         if st != 0:
             return st
         _deriv_var_at(y, yd, ytmp, Ptmp, dvm, disc, sysa, KS[1], KP[1], fel)
-        _stage_var(s, P, h, 0.5, KS[1], KP[1], ytmp, Ptmp, True)
+        _stage_var(s, P, h, _RA32, KS[1], KP[1], ytmp, Ptmp, True)
         _deriv_var_at(y, yd, ytmp, Ptmp, dvm, disc, sysa, KS[2], KP[2], fel)
-    _stage_var(s, P, h, 1.0, KS[2], KP[2], ytmp, Ptmp, True)
-    st = deriv_var(t + 1.0 * h, ytmp, Ptmp, dvm, disc, sysa, xc, xp, xtab, KS[3], KP[3], fel)
+    _stage_var(s, P, h, _RA43, KS[2], KP[2], ytmp, Ptmp, True)
+    st = deriv_var(t + _RC4 * h, ytmp, Ptmp, dvm, disc, sysa, xc, xp, xtab, KS[3], KP[3], fel)
     if st != 0:
         return st
     for q in range(n):
@@ -213,7 +215,8 @@ def rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
                     for j in range(i):
                         acc += h * A[i, j] * KP[j, q, c]
                     Ptmp[q, c] = acc
-        st = deriv(t + Cc[i] * h, ytmp, Ptmp, dvm, disc, want_var, sysa, xc, xp, xtab, KS[i], KP[i], fel)
+        st = deriv(t + Cc[i] * h, ytmp, Ptmp, dvm, disc, want_var, sysa, xc, xp, xtab, KS[i],
+                   KP[i], fel)
         if st != 0:
             return st
     for q in range(n):
