@@ -187,11 +187,16 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
     fcounters = np.zeros(2)
     ev_log = np.zeros((int(event_log), 4))
     h_init = min(dt, Solver.first_step_cap(excitation))
-    status = model.kernels().integrate_kernel(sysa, xc, xp, xtab, METHODS[method], float(t0), float(t_end),
-                                 dt, spc, float(rtol), float(atol), h_init, int(max_steps),
-                                 s0, disc, bool(events), bool(want_var), P0, dvm0,
-                                 bool(track_xmax), int(store_every), bool(graded), out_t, out_s, out_d, out_f,
-                                 ev_log, s_end, disc_end, P_end, dvm_end, xmax, counters, fcounters)
+    status = model.kernels().integrate_kernel(
+        tuple(sysa), xc, xp, xtab,
+        _k.settings(meth=METHODS[method], t0=t0, t_end=t_end, dt=dt, spc=spc, rtol=rtol,
+                    atol=atol, h_init=h_init, max_steps=max_steps, events_on=events,
+                    want_var=want_var, track_xmax=track_xmax, store_every=store_every,
+                    graded=graded),
+        _k.start(s0=s0, disc0=disc, P0=P0, dvm0=dvm0),
+        _k.outputs(t=out_t, s=out_s, delta=out_d, force=out_f, ev_log=ev_log, s_end=s_end,
+                   disc_end=disc_end, P_end=P_end, dvm_end=dvm_end, xmax=xmax,
+                   counters=counters, fcounters=fcounters))
     if status != 0:
         raise IntegrationError(_status_message(status, fcounters[0], method))
     n = counters[0]
@@ -312,7 +317,7 @@ class FlowMap:
                                      t_lo + 1.0 if not math.isfinite(hi) else hi)
         self.model, self.excitation, self.method = model, excitation, method
         self.meth = solver.code
-        self.sysa = model.kernel_arrays()
+        self.sysa = tuple(model.kernel_arrays())  # a plain tuple: see _kernels.bundles
         self.xc, self.xp, self.xtab = excitation.kernel_args()
         self.kernel = model.kernels().integrate_kernel
         self.span = (lo, hi)
@@ -386,12 +391,16 @@ class FlowMap:
         xmax = np.zeros(N)
         c = np.zeros(8, dtype=np.int64)
         fc = np.zeros(2)
-        status = self.kernel(self.sysa, self.xc, self.xp, self.xtab, self.meth, float(t0),
-                             float(t_end), dt, self.spc, self.rtol, self.atol,
-                             min(dt, self.h_init_cap), int(max_steps), s0, disc, self.events,
-                             bool(monodromy), P0, dvm0, True, 0, self.graded, self._empty1,
-                             self._empty2, self._empty_e, self._empty_e, self._ev_log, s_end,
-                             disc_end, P_end, dvm_end, xmax, c, fc)
+        status = self.kernel(
+            self.sysa, self.xc, self.xp, self.xtab,
+            _k.settings(meth=self.meth, t0=t0, t_end=t_end, dt=dt, spc=self.spc, rtol=self.rtol,
+                        atol=self.atol, h_init=min(dt, self.h_init_cap), max_steps=max_steps,
+                        events_on=self.events, want_var=monodromy, track_xmax=True,
+                        store_every=0, graded=self.graded),
+            _k.start(s0=s0, disc0=disc, P0=P0, dvm0=dvm0),
+            _k.outputs(t=self._empty1, s=self._empty2, delta=self._empty_e, force=self._empty_e,
+                       ev_log=self._ev_log, s_end=s_end, disc_end=disc_end, P_end=P_end,
+                       dvm_end=dvm_end, xmax=xmax, counters=c, fcounters=fc))
         if status != 0:
             raise IntegrationError(_status_message(status, fc[0], self.method))
         if self.warn:

@@ -245,10 +245,11 @@ class System:
             upar = np.zeros(1)
         if not np.all(np.isfinite(upar)):
             raise ValueError("custom_params: must be finite")
-        arrays = (np.ascontiguousarray(Minv @ K), np.ascontiguousarray(Minv @ C),
-                  Minv @ yl, Minv @ ydl, etype, ew, ewy, egap, epar,
-                  np.ascontiguousarray(ew @ Minv.T), upar, np.zeros((4, N)),
-                  np.ascontiguousarray(Minv))
+        arrays = _k.SystemArrays(
+            MinvK=np.ascontiguousarray(Minv @ K), MinvC=np.ascontiguousarray(Minv @ C),
+            mek=Minv @ yl, mec=Minv @ ydl, etype=etype, ew=ew, ewy=ewy, egap=egap, epar=epar,
+            mw=np.ascontiguousarray(ew @ Minv.T), upar=upar, uf=np.zeros((4, N)),
+            Minv=np.ascontiguousarray(Minv))
         object.__setattr__(self, "_arrays", arrays)
 
     # the protocol the analyses use
@@ -265,7 +266,7 @@ class System:
         return len(self.elements)
 
     def kernel_arrays(self):
-        """The tuple of arrays the compiled kernels take (see ``nlbeam._kernels``)."""
+        """The arrays the compiled kernels take: a ``SystemArrays`` (nlbeam._kernels.bundles)."""
         return self._arrays
 
     def element_geometry(self):
@@ -273,7 +274,7 @@ class System:
         delta = w . x + wy * y - gap (w shape (n_elements, n_dof); m). Python-side code reads the
         geometry here; ``kernel_arrays`` is the kernels' private layout."""
         a = self._arrays
-        return a[4], a[5], a[6], a[7]
+        return a.etype, a.ew, a.ewy, a.egap
 
     def kernels(self):
         """The compiled kernel module for this system (a private copy with a custom force)."""

@@ -1,10 +1,17 @@
+import importlib.util
 import os
 import sys
 
 import pytest
 
-# shared test helpers: ``from helpers import ...`` (tests/helpers.py)
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+# shared helpers, `from helpers import ...`: tests/helpers.py registered as the module "helpers".
+# Not by putting tests/ on sys.path: its folders nlbeam/, continuation/, stochastic/ (no
+# __init__.py) would then shadow the packages as namespace packages (an editable install finds
+# them after the path entries; pytest runs with --import-mode=importlib).
+_spec = importlib.util.spec_from_file_location(
+    "helpers", os.path.join(os.path.dirname(os.path.abspath(__file__)), "helpers.py"))
+sys.modules["helpers"] = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(sys.modules["helpers"])
 
 
 @pytest.fixture(autouse=True)

@@ -1,10 +1,12 @@
-"""Helpers shared by the test modules (importable as ``from helpers import ...``: conftest.py
-puts this folder on sys.path). No test module imports another; what two of them need lives
+"""Helpers shared by the test modules (``from helpers import ...``: conftest.py registers this
+file as the module ``helpers``). No test module imports another; what two of them need lives
 here, each helper group in its own section."""
 import numpy as np
 import scipy.optimize
+from numba import njit
 
 import nlbeam
+from nlbeam import _kernels
 
 
 # --- continuation: a small harmonic-balance solver for the Duffing oscillator ----------------
@@ -12,7 +14,6 @@ import nlbeam
 # against (tests/continuation/test_continuation_paths.py, _diagram.py)
 DUFF = dict(m=1.0, b=0.1, k=1.0, k3=1.0)  # the Duffing oscillator of the fold tests
 F = 0.2  # its force amplitude (N)
-
 
 
 def hb_residual(c, w, H, n_t=128):
@@ -76,3 +77,76 @@ def hb_coefficients(model, state0, f, H):
     c[0::2] = 2 * X[ks].real
     c[1::2] = -2 * X[ks].imag
     return c
+
+
+# --- calling the private kernels ------------------------------------------------------------
+class KernelCall:
+    """The private kernels of one model and excitation, called with the arguments a test
+    varies: the system arrays, the excitation's kernel arguments and work arrays of the right
+    shapes are filled in (``m`` sensitivity columns, ``kernels``: the kernel package)."""
+
+    def __init__(self, model, excitation, m=1, kernels=_kernels):
+        self.K = kernels
+        self.sysa = model.kernel_arrays()
+        self.xc, self.xp, self.xtab = excitation.kernel_args()
+        self.N, self.ne, self.m = model.n_dof, model.n_elements, m
+
+    def _zeros(self, *shape):
+        return np.zeros(shape)
+
+    def _stages(self, meth):
+        # (from the Python arrays: the kernels run without reference counting, and an array
+        # they return to Python, like tableau's, would crash the interpreter)
+        return {self.K.RK2: self.K._B_RK2, self.K.RK4: self.K._B_RK4,
+                self.K.DP5: self.K._B_DP5}[meth].shape[0]
+
+    def excite(self, t):
+        """(y, y', y'', status) at t."""
+        return self.K.excite(t, self.xc, self.xp, self.xtab)
+
+    def excite_yyd(self, t):
+        return self.K.excite_yyd(t, self.xc, self.xp, self.xtab)
+
+    def kinematics(self, e, s, y, yd):
+        return self.K.kinematics(e, s, y, yd, self.sysa)
+
+    def deriv(self, t, s, P, dvm, disc, want_var=False, variant="deriv"):
+        """(status, ks, kP, fel) of the right-hand side; variant 'deriv' (with want_var),
+        'deriv_plain' or 'deriv_var' (the inlined copies)."""
+        n, m = 2 * self.N, P.shape[1]
+        ks, kP, fel = self._zeros(n), self._zeros(n, m), self._zeros(self.ne)
+        args = (self.sysa, self.xc, self.xp, self.xtab, ks, kP, fel)
+        if variant == "deriv":
+            st = self.K.deriv(t, s, P, dvm, disc, want_var, *args)
+        else:
+            st = getattr(self.K, variant)(t, s, P, dvm, disc, *args)
+        return st, ks, kP, fel
+
+    def rk_step(self, meth, t, h, s, P, dvm, disc, want_var, f0):
+        """(status, s_out, P_out) of one Runge-Kutta step; f0 = f(t, s)."""
+        n, m = 2 * self.N, P.shape[1]
+        ns = self._stages(meth)
+        s_out, P_out = self._zeros(n), self._zeros(n, m)
+        st = self.K.rk_step(meth, t, h, s, P, dvm, disc, want_var, self.sysa, self.xc, self.xp,
+                            self.xtab, f0, s_out, P_out, self._zeros(ns, n),
+                            self._zeros(ns, n, m), self._zeros(n), self._zeros(n, m),
+                            self._zeros(self.ne), self._zeros(n))
+        return st, s_out, P_out
+
+    def rk_step_graded(self, meth, mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, want_var):
+        """(status, t at the end, s_out, P_out) of one graded step (mode 1 onset, 2 exit)."""
+        n, m = 2 * self.N, P.shape[1]
+        ns = self._stages(meth)
+        s_out, P_out = self._zeros(n), self._zeros(n, m)
+        st, t_end = self.K.rk_step_graded(
+            meth, mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, want_var, self.sysa, self.xc,
+            self.xp, self.xtab, s_out, P_out, self._zeros(ns, n), self._zeros(ns, n, m),
+            self._zeros(ns), self._zeros(n), self._zeros(n, m), self._zeros(self.ne))
+        return st, t_end, s_out, P_out
+
+
+# --- a custom force importable by name (its kernels are cached on disk: nlbeam.custom) -------
+@njit
+def cubic_force(t, x, v, y, yd, params, out):
+    """The Duffing spring -k3 x^3 on DOF 0 as a custom force, k3 = params[0]."""
+    out[0] -= params[0] * x[0] ** 3

@@ -5,6 +5,8 @@ import numpy as np
 import pytest
 
 import nlbeam
+from helpers import KernelCall
+from nlbeam import _kernels
 
 PAPER = nlbeam.BeamImpact.paper()
 F40 = nlbeam.Harmonic(1e-4, 40.0)   # A = 0.1 mm at 40 Hz: an impact every period
@@ -270,8 +272,6 @@ def test_the_inlined_right_hand_side_is_deriv_bit_for_bit():
     # the unrolled RK4/DP5 steps evaluate the field with deriv_plain (inlined, y'' skipped via
     # excite_yyd); it must give exactly deriv's accelerations and element forces, or every
     # fixed-step and adaptive result would silently change
-    from nlbeam import _kernels as K
-
     rng = np.random.default_rng(5)
     n = 61
     y = 1e-4 * rng.normal(size=n)
@@ -283,34 +283,31 @@ def test_the_inlined_right_hand_side_is_deriv_bit_for_bit():
               PAPER.replace(contact="hunt-crossley", mu=1e3),
               nlbeam.ModalBeam.paper(n_modes=3)]
     for model in models:
-        sysa = model.kernel_arrays()
         N, ne = model.n_dof, model.n_elements
-        P, kP, dvm = np.zeros((2 * N, 1)), np.zeros((2 * N, 1)), np.zeros((ne, 1))
+        P, dvm = np.zeros((2 * N, 1)), np.zeros((ne, 1))
         for exc in excitations:
-            xc, xp, xtab = exc.kernel_args()
+            kc = KernelCall(model, exc)
             for t in (0.0, 0.0123456, 0.0371, 0.06):
                 y0 = exc.evaluate([t])[0][0]
-                yy = K.excite(t, xc, xp, xtab)
-                assert K.excite_yyd(t, xc, xp, xtab) == (yy[0], yy[1], yy[3])
+                yy = kc.excite(t)
+                assert kc.excite_yyd(t) == (yy[0], yy[1], yy[3])
                 for pen, inside in ((-1e-5, 0.0), (3e-6, 1.0), (3e-6, 0.0), (-1e-7, 1.0)):
                     s = 1e-3 * rng.normal(size=2 * N)
                     # put the contact point at penetration pen: delta = w.x + wy*y - gap
                     _, w, wy, gap = model.element_geometry()
                     s[:N] += w[0] * (pen - (w[0] @ s[:N] + wy[0] * y0 - gap[0])) / (w[0] @ w[0])
                     disc = np.array([[inside, 0.05]] * ne)
-                    ks1, ks2 = np.zeros(2 * N), np.zeros(2 * N)
-                    f1, f2 = np.zeros(ne), np.zeros(ne)
-                    st1 = K.deriv(t, s, P, dvm, disc, False, sysa, xc, xp, xtab, ks1, kP, f1)
-                    st2 = K.deriv_plain(t, s, P, dvm, disc, sysa, xc, xp, xtab, ks2, kP, f2)
+                    st1, ks1, _, f1 = kc.deriv(t, s, P, dvm, disc)
+                    st2, ks2, _, f2 = kc.deriv(t, s, P, dvm, disc, variant="deriv_plain")
                     assert st1 == st2 == 0
                     np.testing.assert_array_equal(ks1, ks2)
                     np.testing.assert_array_equal(f1, f2)
                     if inside and pen > 0:
                         assert f1[0] > 0.0
     # outside the sampled table both report the range error
-    xc, xp, xtab = excitations[1].kernel_args()
-    assert K.excite_yyd(0.5, xc, xp, xtab)[2] == K.ERR_EXCITATION_RANGE
-    assert K.excite(0.5, xc, xp, xtab)[3] == K.ERR_EXCITATION_RANGE
+    kc = KernelCall(PAPER, excitations[1])
+    assert kc.excite_yyd(0.5)[2] == _kernels.ERR_EXCITATION_RANGE
+    assert kc.excite(0.5)[3] == _kernels.ERR_EXCITATION_RANGE
 
 
 def _field_cases():
@@ -344,21 +341,21 @@ def _field_cases():
                     yield model, exc, t, s, disc, rng
 
 
-def _rk4_var_reference(K, t, h, s, P, dvm, disc, sysa, xc, xp, xtab):
+def _rk4_var_reference(kc, t, h, s, P, dvm, disc):
     """rk_step's tableau loops (RK4, with the variational equations) on the generic deriv, in
     Python: the same floating-point operations in the same order."""
-    A, B, _, C = K._A_RK4, K._B_RK4, K._B_RK4, K._C_RK4
-    n, m = P.shape
-    KS, KP = np.zeros((4, n)), np.zeros((4, n, m))
-    fel = np.zeros(disc.shape[0])
+    A, B, C = _kernels._A_RK4, _kernels._B_RK4, _kernels._C_RK4
+    KS, KP = [], []
     for i in range(4):
         ytmp = s.copy()
         Ptmp = P.copy()
         for j in range(i):
             ytmp = ytmp + h * A[i, j] * KS[j]
             Ptmp = Ptmp + h * A[i, j] * KP[j]
-        assert K.deriv(t + C[i] * h, ytmp, Ptmp, dvm, disc, True, sysa, xc, xp, xtab,
-                       KS[i], KP[i], fel) == 0
+        st, ks, kP, _ = kc.deriv(t + C[i] * h, ytmp, Ptmp, dvm, disc, want_var=True)
+        assert st == 0
+        KS.append(ks)
+        KP.append(kP)
     s_out, P_out = s.copy(), P.copy()
     for j in range(4):
         s_out = s_out + h * B[j] * KS[j]
@@ -370,32 +367,23 @@ def test_the_inlined_variational_step_is_the_tableau_step_bit_for_bit():
     # the RK4 step with variational equations is unrolled with deriv_var inlined (the
     # monodromy of every shooting problem); deriv_var must be deriv(want_var=True) exactly, and
     # the step the tableau loops' step exactly (their zero terms dropped: equal as numbers)
-    from nlbeam import _kernels as K
-
     n_cases = 0
     for model, exc, t, s, disc, rng in _field_cases():
-        sysa = model.kernel_arrays()
-        xc, xp, xtab = exc.kernel_args()
         N, ne = model.n_dof, model.n_elements
         m = 2 * N + ne
+        kc = KernelCall(model, exc, m=m)
         P = np.hstack([np.eye(2 * N), 0.1 * rng.normal(size=(2 * N, ne))]) + 0.01 * rng.normal(
             size=(2 * N, m))
         dvm = rng.normal(size=(ne, m))
-        ks1, ks2 = np.zeros(2 * N), np.zeros(2 * N)
-        kP1, kP2 = np.zeros((2 * N, m)), np.zeros((2 * N, m))
-        f1, f2 = np.zeros(ne), np.zeros(ne)
-        assert K.deriv(t, s, P, dvm, disc, True, sysa, xc, xp, xtab, ks1, kP1, f1) == 0
-        assert K.deriv_var(t, s, P, dvm, disc, sysa, xc, xp, xtab, ks2, kP2, f2) == 0
+        st1, ks1, kP1, f1 = kc.deriv(t, s, P, dvm, disc, want_var=True)
+        st2, ks2, kP2, f2 = kc.deriv(t, s, P, dvm, disc, variant="deriv_var")
+        assert st1 == st2 == 0
         np.testing.assert_array_equal(ks1, ks2)
         np.testing.assert_array_equal(kP1, kP2)
         np.testing.assert_array_equal(f1, f2)
         h = 2e-5
-        s_ref, P_ref = _rk4_var_reference(K, t, h, s, P, dvm, disc, sysa, xc, xp, xtab)
-        s_out, P_out = np.zeros(2 * N), np.zeros((2 * N, m))
-        KS, KP = np.zeros((4, 2 * N)), np.zeros((4, 2 * N, m))
-        st = K.rk_step(K.RK4, t, h, s, P, dvm, disc, True, sysa, xc, xp, xtab, ks1, s_out, P_out,
-                       KS, KP, np.zeros(2 * N), np.zeros((2 * N, m)), np.zeros(ne),
-                       np.zeros(2 * N))
+        s_ref, P_ref = _rk4_var_reference(kc, t, h, s, P, dvm, disc)
+        st, s_out, P_out = kc.rk_step(_kernels.RK4, t, h, s, P, dvm, disc, True, ks1)
         assert st == 0
         np.testing.assert_array_equal(s_out, s_ref)
         np.testing.assert_array_equal(P_out, P_ref)
@@ -406,28 +394,24 @@ def test_the_inlined_variational_step_is_the_tableau_step_bit_for_bit():
 def test_the_unrolled_graded_step_is_the_tableau_step_bit_for_bit():
     # rk_step_graded (the steps in sqrt(t - t_onset) and sqrt(delta) at a contact's ends) is
     # unrolled for RK4 with the field inlined; the reference is its tableau loops in Python
-    from nlbeam import _kernels as K
-
-    A, B, C = K._A_RK4, K._B_RK4, K._C_RK4
+    A, B, C = _kernels._A_RK4, _kernels._B_RK4, _kernels._C_RK4
     n_cases = 0
     for model, exc, t, s, disc, rng in _field_cases():
         if disc[0, 0] == 0.0:
             continue
-        sysa = model.kernel_arrays()
-        xc, xp, xtab = exc.kernel_args()
         N, ne = model.n_dof, model.n_elements
-        y, yd, _, _ = K.excite(t, xc, xp, xtab)
-        s[N:] -= 0.3 * np.abs(s[N:])  # mode 2 needs delta' < 0 on the step
-        dd0 = K.kinematics(0, s, y, yd, sysa)[1]
-        s[N:] += model.element_geometry()[1][0] * (-0.05 - dd0) / (
-            model.element_geometry()[1][0] @ model.element_geometry()[1][0])
         m = 2 * N
+        kc = KernelCall(model, exc, m=m)
+        y, yd, _, _ = kc.excite(t)
+        s[N:] -= 0.3 * np.abs(s[N:])  # mode 2 needs delta' < 0 on the step
+        dd0 = kc.kinematics(0, s, y, yd)[1]
+        w0 = model.element_geometry()[1][0]
+        s[N:] += w0 * (-0.05 - dd0) / (w0 @ w0)
         P = np.eye(2 * N) + 0.01 * rng.normal(size=(2 * N, m))
         dvm = rng.normal(size=(ne, m))
         for mode, u0, hu in ((1, 0.0, 1e-3), (1, 2e-3, 1e-3), (2, 1.7e-3, -2e-4)):
             for want_var in (True, False):
                 KS, KP, KT = np.zeros((4, 2 * N)), np.zeros((4, 2 * N, m)), np.zeros(4)
-                fel = np.zeros(ne)
                 t_ref = t - u0 * u0
                 for i in range(4):
                     ytmp, Ptmp = s.copy(), P.copy()
@@ -441,13 +425,13 @@ def test_the_unrolled_graded_step_is_the_tableau_step_bit_for_bit():
                         ti = t
                         for j in range(i):
                             ti += hu * A[i, j] * KT[j]
-                    assert K.deriv(ti, ytmp, Ptmp, dvm, disc, want_var, sysa, xc, xp, xtab,
-                                   KS[i], KP[i], fel) == 0
+                    st, KS[i], KP[i], _ = kc.deriv(ti, ytmp, Ptmp, dvm, disc, want_var)
+                    assert st == 0
                     if mode == 1:
                         sc = 2.0 * ui
                     else:
-                        yi, ydi, _, _ = K.excite(ti, xc, xp, xtab)
-                        sc = 2.0 * ui / K.kinematics(0, ytmp, yi, ydi, sysa)[1]
+                        yi, ydi, _, _ = kc.excite(ti)
+                        sc = 2.0 * ui / kc.kinematics(0, ytmp, yi, ydi)[1]
                     KT[i] = sc
                     KS[i] *= sc
                     KP[i] *= sc
@@ -458,11 +442,8 @@ def test_the_unrolled_graded_step_is_the_tableau_step_bit_for_bit():
                     t_end += hu * B[j] * KT[j]
                 if mode == 1:
                     t_end = t_ref + (u0 + hu) * (u0 + hu)
-                s_out, P_out = np.zeros(2 * N), np.zeros((2 * N, m))
-                st, tn = K.rk_step_graded(
-                    K.RK4, mode, u0, hu, t_ref, 0, s, t, P, dvm, disc, want_var, sysa, xc, xp,
-                    xtab, s_out, P_out, np.zeros((4, 2 * N)), np.zeros((4, 2 * N, m)),
-                    np.zeros(4), np.zeros(2 * N), np.zeros((2 * N, m)), np.zeros(ne))
+                st, tn, s_out, P_out = kc.rk_step_graded(_kernels.RK4, mode, u0, hu, t_ref, 0, s,
+                                                         t, P, dvm, disc, want_var)
                 assert st == 0
                 np.testing.assert_array_equal(s_out, s_ref)
                 assert tn == t_end

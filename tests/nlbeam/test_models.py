@@ -1,10 +1,19 @@
 """The models: parameters, sign convention, helpers of the contact laws, bad input."""
+import json
 import math
+import os
+import pickle
+import subprocess
+import sys
+import textwrap
+import types
 
 import numpy as np
 import pytest
 
 import nlbeam
+from helpers import cubic_force
+from nlbeam import custom as custom_mod
 
 
 def test_paper_parameters_and_linear_frequency():
@@ -91,22 +100,88 @@ def test_general_system_validates_matrices():
 
 @pytest.mark.slow
 def test_a_custom_jitted_force_equals_the_built_in_cubic_spring():
-    from numba import njit
-
-    @njit
-    def cubic(t, x, v, y, yd, params, out):
-        out[0] -= params[0] * x[0] ** 3
-
+    # helpers.cubic_force is importable by name: its kernels come from the disk cache after the
+    # first run on this machine (nlbeam.custom)
     ex = nlbeam.Harmonic(0.2, 0.15)
     duff = nlbeam.Duffing(m=1.0, b=0.1, k=1.0, k3=1.0)
     custom = nlbeam.System([[1.0]], [[0.1]], [[1.0]], (), "force", y_load=[1.0], yd_load=[0.0],
-                           custom_force=cubic, custom_params=[1.0])
+                           custom_force=cubic_force, custom_params=[1.0])
     a = nlbeam.integrate(duff, ex, 20.0, dt=0.01, x0=[0.3, 0.0])
     b = nlbeam.integrate(custom, ex, 20.0, dt=0.01, x0=[0.3, 0.0])
     np.testing.assert_allclose(b.x, a.x, rtol=0, atol=1e-13)
     fa = nlbeam.flow(duff, ex, [0.3, 0.0], 0.0, 5.0, monodromy=True, dt=0.01)
     fb = nlbeam.flow(custom, ex, [0.3, 0.0], 0.0, 5.0, monodromy=True, dt=0.01)
     np.testing.assert_allclose(fb.monodromy, fa.monodromy, rtol=1e-5, atol=1e-6)
+    assert custom.kernels().__name__.startswith("nlbeam._kernels_cached_")
+
+
+def test_a_worker_process_loads_the_custom_force_kernels_from_the_disk_cache(tmp_path):
+    # a model sent to another process (a sweep's or Dask's worker) with its force pickled: the
+    # worker finds the kernels compiled here in the disk cache (numba counts a cache hit)
+    custom = nlbeam.System([[1.0]], [[0.1]], [[1.0]], (), "force", y_load=[1.0],
+                           custom_force=cubic_force, custom_params=[1.0])
+    ex = nlbeam.Harmonic(0.2, 0.15)
+    here = nlbeam.flow(custom, ex, [0.3, 0.0], 0.0, 1.0, monodromy=True, dt=0.01)  # compiled
+    (tmp_path / "model.pkl").write_bytes(pickle.dumps(custom))
+    helpers_py = os.path.join(os.path.dirname(os.path.dirname(__file__)), "helpers.py")
+    code = textwrap.dedent(f"""
+        import importlib.util, json, pickle, sys
+        import nlbeam
+        spec = importlib.util.spec_from_file_location("helpers", {helpers_py!r})
+        sys.modules["helpers"] = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(sys.modules["helpers"])
+        with open({str(tmp_path / "model.pkl")!r}, "rb") as f:
+            custom = pickle.load(f)
+        fl = nlbeam.flow(custom, nlbeam.Harmonic(0.2, 0.15), [0.3, 0.0], 0.0, 1.0,
+                         monodromy=True, dt=0.01)
+        k = custom.kernels()
+        stats = k.integrate_kernel.stats
+        print(json.dumps([k.__name__, sum(stats.cache_hits.values()),
+                          sum(stats.cache_misses.values()), fl.state.tolist(),
+                          fl.monodromy.tolist()]))
+    """)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    name, hits, misses, state, mono = json.loads(out.splitlines()[-1])
+    assert name == custom.kernels().__name__
+    assert (hits, misses) == (1, 0)   # loaded, not compiled
+    np.testing.assert_array_equal(state, here.state)   # (JSON keeps floats exactly)
+    np.testing.assert_array_equal(mono, here.monodromy)
+
+
+def test_a_custom_force_that_cannot_be_imported_by_name_is_not_cached():
+    from numba import njit
+
+    @njit
+    def local(t, x, v, y, yd, params, out):
+        out[0] -= x[0]
+
+    where, why = custom_mod.import_path(local)
+    assert where is None and "inside a function" in why
+    assert custom_mod.cached_folder(local) == (None, why)
+    with pytest.warns(RuntimeWarning, match="inside a function.*without a disk cache"):
+        k = custom_mod.kernels_for(local)   # (compiles lazily: nothing called here)
+    assert k.hook._USER_FORCE is local and k.hook._HAS_USER and not k.hook._CACHE
+    assert custom_mod.kernels_for(local) is k   # once per function and process
+    # an importable force: a generated copy that imports it by name, cached on disk
+    assert custom_mod.import_path(cubic_force) == (("helpers", "cubic_force"), None)
+    k = custom_mod.kernels_for(cubic_force)
+    assert k.hook._USER_FORCE is cubic_force and k.hook._CACHE
+    assert k.__file__.startswith(custom_mod.cache_root())
+
+
+def test_the_custom_force_cache_key_follows_the_globals_it_reads():
+    # numba freezes a force's global constants into the compiled code: a changed constant must
+    # give another cached copy, the same source and values the same one
+    def force_module(k3):
+        mod = types.ModuleType("nlbeam_test_force_module")
+        exec("from numba import njit\nK3 = %r\n\n@njit\ndef f(t, x, v, y, yd, params, out):\n"
+             "    out[0] -= K3 * x[0] ** 3\n" % k3, mod.__dict__)
+        return mod.f
+
+    keys = [custom_mod.cache_key(force_module(k3), "m", "f") for k3 in (1.0, 1.0, 2.0)]
+    assert keys[0] == keys[1] != keys[2]
+    assert custom_mod.cache_key(cubic_force, "helpers", "cubic_force") != keys[0]
 
 
 def test_custom_force_must_be_jitted():

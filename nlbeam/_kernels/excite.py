@@ -1,0 +1,105 @@
+"""Excitation evaluation: y, y', y'' (m or N and rates) of a harmonic, a sampled table (cubic
+Hermite) or a sum of cosines at time t (s)."""
+import math
+
+from .codes import ERR_EXCITATION_RANGE
+from .hook import njit
+
+
+@njit(cache=True, inline="always")
+def _table_cell(t, p, tab):
+    """Cell of a sampled table (code 1) holding t: (i, th, th^2, th^3, h, status), th in [0, 1]
+    the position inside cell i; status ERR_EXCITATION_RANGE outside the table."""
+    h = p[1]
+    n = tab.shape[0]
+    u = (t - p[0]) / h
+    if u < -1e-9 or u > (n - 1) + 1e-9:
+        return 0, 0.0, 0.0, 0.0, h, ERR_EXCITATION_RANGE
+    i = int(math.floor(u))
+    if i < 0:
+        i = 0
+    if i > n - 2:
+        i = n - 2
+    th = u - i
+    th2 = th * th
+    th3 = th2 * th
+    return i, th, th2, th3, h, 0
+
+
+@njit(cache=True, inline="always")
+def _table_y_yd(i, th, th2, th3, h, tab):
+    """Cubic Hermite y from (y, y') and y' from (y', y'') in cell i (y' linear where the table
+    has no y'', column 2 NaN): (y, y', no_ydd)."""
+    h00 = 2.0 * th3 - 3.0 * th2 + 1.0
+    h10 = th3 - 2.0 * th2 + th
+    h01 = -2.0 * th3 + 3.0 * th2
+    h11 = th3 - th2
+    y = h00 * tab[i, 0] + h10 * h * tab[i, 1] + h01 * tab[i + 1, 0] + h11 * h * tab[i + 1, 1]
+    if math.isnan(tab[i, 2]):
+        return y, (1.0 - th) * tab[i, 1] + th * tab[i + 1, 1], True
+    yd = h00 * tab[i, 1] + h10 * h * tab[i, 2] + h01 * tab[i + 1, 1] + h11 * h * tab[i + 1, 2]
+    return y, yd, False
+
+
+@njit(cache=True)
+def excite(t, code, p, tab):
+    """(y, y', y'', status) at time t (s)."""
+    if code == 0:
+        arg = p[1] * t + p[2]
+        c = math.cos(arg)
+        s = math.sin(arg)
+        return p[0] * c, -p[0] * p[1] * s, -p[0] * p[1] * p[1] * c, 0
+    elif code == 1:
+        i, th, th2, th3, h, st = _table_cell(t, p, tab)
+        if st != 0:
+            return 0.0, 0.0, 0.0, st
+        y, yd, nan_ydd = _table_y_yd(i, th, th2, th3, h, tab)
+        if nan_ydd:
+            ydd = (tab[i + 1, 1] - tab[i, 1]) / h
+        else:
+            d00 = (6.0 * th2 - 6.0 * th) / h
+            d10 = 3.0 * th2 - 4.0 * th + 1.0
+            d01 = (-6.0 * th2 + 6.0 * th) / h
+            d11 = 3.0 * th2 - 2.0 * th
+            ydd = d00 * tab[i, 1] + d10 * tab[i, 2] + d01 * tab[i + 1, 1] + d11 * tab[i + 1, 2]
+        return y, yd, ydd, 0
+    else:
+        y = 0.0
+        yd = 0.0
+        ydd = 0.0
+        for k in range(tab.shape[0]):
+            w = tab[k, 0]
+            arg = w * t + tab[k, 2]
+            c = math.cos(arg)
+            s = math.sin(arg)
+            y += tab[k, 1] * c
+            yd -= tab[k, 1] * w * s
+            ydd -= tab[k, 1] * w * w * c
+        return y, yd, ydd, 0
+
+
+@njit(cache=True)
+def excite_yyd(t, code, p, tab):
+    """(y, y', status) at time t: ``excite`` without y'' (what a right-hand side needs). The
+    sampled table (code 1) is evaluated by the same expressions as in ``excite`` (bit for bit
+    the same y, y'), without the y'' polynomial."""
+    if code != 1:
+        y, yd, ydd, st = excite(t, code, p, tab)
+        return y, yd, st
+    i, th, th2, th3, h, st = _table_cell(t, p, tab)
+    if st != 0:
+        return 0.0, 0.0, st
+    y, yd, nan_ydd = _table_y_yd(i, th, th2, th3, h, tab)
+    return y, yd, 0
+
+
+@njit(cache=True)
+def excitation_many(code, p, tab, t, out):
+    """Evaluate (y, y') at every t into out (n, 2); status of the first failure."""
+    for i in range(t.shape[0]):
+        y, yd, ydd, st = excite(t[i], code, p, tab)
+        if st != 0:
+            return st
+        out[i, 0] = y
+        out[i, 1] = yd
+    return 0

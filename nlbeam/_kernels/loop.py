@@ -1,0 +1,573 @@
+"""The integration loop: ``integrate_kernel`` from t0 to t_end with exact contact events,
+graded contact steps, dense-output samples and the monodromy."""
+import math
+
+import numpy as np
+
+from .bundles import Outputs, Settings, Start, SystemArrays, Work
+from .codes import DP5, ERR_MAX_STEPS, ERR_STEP_UNDERFLOW, PWL_STOP, RK2, RK4, VMINUS_FLOOR
+from .contact import contact_rate, contact_step
+from .events import _crossing, _may_cross, delta_extremum, hermite5, locate, step_extrema
+from .excite import excite, excite_yyd
+from .field import deriv, deriv_plain, element_force, has_event, kinematics
+from .graded import rk_step_graded
+from .hook import _HAS_USER, njit
+from .steps import _rk_step_plain, _rk_step_var, rk_step, tableau
+
+
+@njit(cache=True, inline="always")
+def _store(n_stored, t, s, disc, xc, xp, xtab, sysa, out_t, out_s, out_d, out_f):
+    """Write sample n_stored: t, s, and delta and force of every element. Inlined into the
+    integrator's loop, with y'' skipped and the penetration computed in place (the same
+    expressions as ``kinematics``): a call with the system's arrays cost ~100 ns a sample."""
+    y, yd, st = excite_yyd(t, xc, xp, xtab)
+    etype = sysa.etype
+    ew = sysa.ew
+    N = ew.shape[1]
+    out_t[n_stored] = t
+    for q in range(s.shape[0]):
+        out_s[n_stored, q] = s[q]
+    for e in range(etype.shape[0]):
+        d = sysa.ewy[e] * y - sysa.egap[e]
+        dd = sysa.ewy[e] * yd
+        for j in range(N):
+            d += ew[e, j] * s[j]
+            dd += ew[e, j] * s[N + j]
+        out_d[n_stored, e] = d
+        f, a1, a2, a3 = element_force(etype[e], sysa.epar[e], d, dd, disc[e, 1], disc[e, 0])
+        out_f[n_stored, e] = f
+    return n_stored + 1
+
+
+@njit(cache=True, _nrt=True)
+def integrate_kernel(system, xc, xp, xtab, settings, start, outputs):
+    """Integrate from t0 to t_end: ``system``, ``settings``, ``start`` and ``outputs`` are the
+    fields of SystemArrays, Settings, Start and Outputs (bundles.py), (xc, xp, xtab) the
+    excitation. Returns the status.
+
+    Fixed-step methods (RK2, RK4) step on the grid t0 + k dt in free flight; inside a contact
+    they take steps of (estimated contact duration) / spc, starting from the onset and ignoring
+    the grid (grid samples inside a contact come from the quintic Hermite dense output), so that
+    the step sequence is a smooth function of the initial state. Every contact boundary is a
+    root of the step map, landed on to a few ulps of t. With ``graded`` (one element in contact)
+    the first quarter of a contact is stepped uniformly in sigma = sqrt(t - t_onset), and from
+    the point where delta has fallen back to KAPPA * (its maximum) uniformly in u = sqrt(delta)
+    down to delta = 0 (then polished to round-off): this removes the delta^1.5 singularity of
+    the contact force at both boundaries. DP5 controls its error with (rtol, atol); grid samples
+    come from dense output. Samples: every store_every-th grid point, t0 and t_end included.
+    """
+    sysa = SystemArrays(*system)
+    cfg = Settings(*settings)
+    st0 = Start(*start)
+    N = sysa.MinvK.shape[0]
+    n = 2 * N
+    ne = sysa.etype.shape[0]
+    m = st0.P0.shape[1]
+    A, B, BH, Cc = tableau(cfg.meth)
+    ns = B.shape[0]
+    KS = np.zeros((ns, n))
+    KP = np.zeros((ns, n, m))
+    KT = np.zeros(ns)
+    ytmp = np.zeros(n)
+    Ptmp = np.zeros((n, m))
+    fel = np.zeros(ne)
+    err_w = np.zeros(n)
+    s = st0.s0.copy()
+    P = st0.P0.copy()
+    dvm = st0.dvm0.copy()
+    disc = st0.disc0.copy()
+    s_new = np.zeros(n)
+    P_new = np.zeros((n, m))
+    s_try = np.zeros(n)
+    f0 = np.zeros(n)
+    f1 = np.zeros(n)
+    dummyP = np.zeros((n, m))
+    steps_in_contact = np.zeros(ne, dtype=np.int64)
+    # a contact under way at t0 started before this call: its steps here are not all of its
+    # steps, so it does not enter the steps-per-contact count
+    from_before = np.zeros(ne, dtype=np.bool_)
+    dtc = np.full(ne, np.inf)
+    d_sw = np.full(ne, -1.0)     # delta at which the graded exit phase starts (-1: unknown)
+    work = Work(KS=KS, KP=KP, KT=KT, ytmp=ytmp, Ptmp=Ptmp, fel=fel, err_w=err_w, s=s, P=P,
+                dvm=dvm, disc=disc, s_new=s_new, P_new=P_new, s_try=s_try, dummyP=dummyP, f0=f0,
+                f1=f1, steps_in_contact=steps_in_contact, from_before=from_before, dtc=dtc,
+                d_sw=d_sw)
+    return _integrate_loop(sysa, xc, xp, xtab, cfg, Outputs(*outputs), work)
+
+
+@njit(cache=True)
+def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
+    """The body of integrate_kernel, on the work arrays it allocated (no reference counting
+    here: see ``njit``): the bundles' fields as local names, then the loop."""
+    meth, t0, t_end, dt, spc = cfg.meth, cfg.t0, cfg.t_end, cfg.dt, cfg.spc
+    rtol, atol, h_init, max_steps = cfg.rtol, cfg.atol, cfg.h_init, cfg.max_steps
+    events_on, want_var, track_xmax = cfg.events_on, cfg.want_var, cfg.track_xmax
+    store_every, graded = cfg.store_every, cfg.graded
+    out_t, out_s, out_d, out_f, ev_log = out.t, out.s, out.delta, out.force, out.ev_log
+    s_end, disc_end, P_end, dvm_end = out.s_end, out.disc_end, out.P_end, out.dvm_end
+    xmax, counters, fcounters = out.xmax, out.counters, out.fcounters
+    KS, KP, KT, ytmp, Ptmp, fel, err_w = (work.KS, work.KP, work.KT, work.ytmp, work.Ptmp,
+                                          work.fel, work.err_w)
+    s, P, dvm, disc, s_new, P_new = work.s, work.P, work.dvm, work.disc, work.s_new, work.P_new
+    s_try, dummyP, f0, f1 = work.s_try, work.dummyP, work.f0, work.f1
+    steps_in_contact, from_before, dtc, d_sw = (work.steps_in_contact, work.from_before,
+                                                work.dtc, work.d_sw)
+    KAPPA = 0.25
+    etype = sysa.etype
+    N = sysa.MinvK.shape[0]
+    n = 2 * N
+    ne = etype.shape[0]
+    m = P.shape[1]
+    A, B, BH, Cc = tableau(meth)
+    ns = B.shape[0]
+    y, yd, ydd, st = excite(t0, xc, xp, xtab)
+    for e in range(ne):
+        if disc[e, 0] != 0.0:
+            from_before[e] = True
+            # a record that starts inside a contact: the impact velocity with the same energy
+            d, dd = kinematics(e, s, y, yd, sysa)
+            winv = 0.0
+            for j in range(N):
+                winv += sysa.ew[e, j] * sysa.mw[e, j]
+            K = sysa.epar[e, 0]
+            pot = 0.8 * K * max(d, 0.0) ** 2.5 if etype[e] != PWL_STOP else K * max(d, 0.0) ** 2
+            dtc[e] = min(contact_step(e, math.sqrt(dd * dd + pot * winv), 0.0, sysa, spc), dt)
+
+    n_stored = 0
+    n_steps = 0
+    n_rej = 0
+    n_rhs = 0
+    n_imp = 0
+    min_spc = 1 << 62
+    n_contacts = 0
+    n_events = 0
+    max_land = 0.0
+    fixed = meth != DP5
+    n_grade = max(2, int(spc // 4))
+    k_grid = 0
+    n_grid = int(math.ceil((t_end - t0) / dt - 1e-9))
+    t = t0
+    h = h_init
+    status = 0
+    en = 1.0
+    phase = 0       # 0: time steps; 1: onset, steps in sigma; 2: exit, steps in u
+    pe = -1         # the element of the graded phase
+    g_t0 = 0.0
+    g_u = 0.0
+    g_end = 0.0
+    g_h = 0.0
+
+    st = deriv(t, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0, KP[0], fel)
+    n_rhs += 1
+    if st != 0:
+        return st
+    if track_xmax:
+        for i in range(N):
+            xmax[i] = max(xmax[i], abs(s[i]))
+    if store_every > 0 and out_t.shape[0] > 0:
+        n_stored = _store(n_stored, t, s, disc, xc, xp, xtab, sysa, out_t, out_s, out_d, out_f)
+
+    while t < t_end and status == 0:
+        if n_steps >= max_steps:
+            status = ERR_MAX_STEPS
+            break
+        n_in = 0
+        for e in range(ne):
+            if disc[e, 0] != 0.0:
+                n_in += 1
+                if phase == 0:
+                    pe = e
+        ev = -1
+        tau_ev = 0.0
+        hit_grid = False
+        enter_exit = False
+        if phase == 2:
+            y, yd, ydd, st = excite(t, xc, xp, xtab)
+            d, dd = kinematics(pe, s, y, yd, sysa)
+            if disc[pe, 0] == 0.0 or dd >= 0.0 or n_in != 1:
+                phase = 0
+        if phase == 1 and n_in != 1:
+            phase = 0
+        if phase != 0:
+            # a graded step longer than the stability limit of the contact law (a slow, stiff
+            # contact): fall back to time steps, which respect it
+            if phase == 1:
+                dt_est = (g_u + g_h) ** 2 - g_u ** 2
+            else:
+                y, yd, ydd, st = excite(t, xc, xp, xtab)
+                d, dd = kinematics(pe, s, y, yd, sysa)
+                dt_est = 2.0 * g_u * g_h / max(-dd, 1e-300)
+            if contact_rate(t, s, disc, sysa, xc, xp, xtab) * dt_est > 0.5:
+                phase = 0
+        if phase == 1:
+            # onset phase: uniform steps in sigma = sqrt(t - t_onset)
+            hs = min(g_h, g_end - g_u)
+            cut = False
+            if g_t0 + (g_u + hs) ** 2 >= t_end:
+                hs = math.sqrt(t_end - g_t0) - g_u
+                cut = True
+            st, t_new = rk_step_graded(meth, 1, g_u, hs, g_t0, pe, s, t, P, dvm, disc, want_var,
+                                       sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp,
+                                       fel)
+            n_rhs += ns
+            if cut:
+                t_new = t_end
+            ok = st == 0
+            if ok:
+                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0],
+                           fel)
+                n_rhs += 1
+                yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
+                for e in range(ne):
+                    if has_event(etype[e]):
+                        d, dd = kinematics(e, s_new, yv, ydv, sysa)
+                        if (disc[e, 0] != 0.0 and d < 0.0) or (disc[e, 0] == 0.0 and d > 0.0):
+                            ok = False
+            if not ok:
+                phase = 0  # something happens inside the onset phase: fall back to time steps
+                continue
+            g_u += hs
+            if g_u >= g_end * (1.0 - 1e-12):
+                phase = 0
+        elif phase == 2:
+            # exit phase: uniform steps in u = sqrt(delta) down to u = 0
+            hu = min(g_h, g_u)
+            if g_u - hu < 1e-9 * g_h:
+                hu = g_u
+            st, t_new = rk_step_graded(meth, 2, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, want_var,
+                                       sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp,
+                                       fel)
+            n_rhs += ns
+            if st != 0 or t_new > t_end or t_new <= t:
+                phase = 0  # the record ends inside the exit phase (or it failed): time steps
+                continue
+            # the step in u is only valid while delta falls monotonically: if delta' reached 0
+            # inside it (a slow contact held by the base), the state no longer has delta =
+            # u^2 and delta' < 0; retake the step in time
+            yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
+            d, dd = kinematics(pe, s_new, yv, ydv, sysa)
+            u_new = g_u - hu
+            if not (dd < 0.0 and abs(d - u_new * u_new) <= 0.05 * (g_u * g_u - u_new * u_new)):
+                phase = 0
+                continue
+            g_u -= hu
+            st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
+            n_rhs += 1
+            if g_u <= 0.0:
+                # landed on delta = 0 up to the truncation error: polish to round-off by Newton
+                # steps in time, then switch
+                for _ in range(4):
+                    yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
+                    d, dd = kinematics(pe, s_new, yv, ydv, sysa)
+                    if d == 0.0 or abs(d) <= 1e-15 * (abs(yv) + abs(sysa.egap[pe]) + 1e-300):
+                        break
+                    tau = -d / dd
+                    for q in range(n):
+                        s_try[q] = s_new[q]
+                        if want_var:
+                            for c in range(m):
+                                dummyP[q, c] = P_new[q, c]
+                    st = rk_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var, sysa, xc,
+                                 xp, xtab, f1, s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+                    t_new = t_new + tau
+                    st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1,
+                               KP[0], fel)
+                yv, ydv, yddv, st2 = excite(t_new, xc, xp, xtab)
+                d, dd = kinematics(pe, s_new, yv, ydv, sysa)
+                if d > 0.0 and dd < 0.0:
+                    # land on the far side (delta <= 0) of the boundary
+                    tau = -2.0 * d / dd
+                    for q in range(n):
+                        s_try[q] = s_new[q]
+                        if want_var:
+                            for c in range(m):
+                                dummyP[q, c] = P_new[q, c]
+                    st = rk_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var, sysa, xc,
+                                 xp, xtab, f1, s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+                    t_new = t_new + tau
+                    st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1,
+                               KP[0], fel)
+                ev = pe
+                tau_ev = t_new - t
+                phase = 0
+        else:
+            # ---- an ordinary step in time
+            if fixed:
+                tg = t0 + (k_grid + 1) * dt if k_grid + 1 < n_grid else t_end
+                if n_in > 0:
+                    hc = np.inf
+                    for e in range(ne):
+                        if disc[e, 0] != 0.0 and dtc[e] < hc:
+                            hc = dtc[e]
+                    # explicit stability: the law's stiffness and damping rates
+                    lam = contact_rate(t, s, disc, sysa, xc, xp, xtab)
+                    if lam * hc > 0.5:
+                        hc = 0.5 / lam
+                    h = hc
+                    if h >= t_end - t:
+                        h = t_end - t
+                        hit_grid = True
+                else:
+                    h = tg - t
+                    hit_grid = True
+            else:
+                if h >= t_end - t:
+                    h = t_end - t
+                if h < 1e-14 * max(abs(t), 1.0):
+                    status = ERR_STEP_UNDERFLOW
+                    break
+            if not want_var and meth != RK2:
+                # without variational equations: straight to the unrolled RK4/DP5 step (what
+                # rk_step would call), one call level less per step
+                st = _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_new,
+                                    KS, KP, ytmp, fel, err_w)
+            elif not _HAS_USER and meth == RK4:
+                # with them: the unrolled RK4 step with the variational equations, likewise
+                st = _rk_step_var(t, h, s, P, dvm, disc, sysa, xc, xp, xtab, s_new, P_new, KS, KP,
+                                  ytmp, Ptmp, fel)
+            else:
+                st = rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
+                             s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+            n_rhs += ns - (0 if want_var else 1)
+            if st != 0:
+                status = st
+                break
+            if not fixed:
+                en = 0.0
+                for q in range(n):
+                    sc = atol + rtol * max(abs(s[q]), abs(s_new[q]))
+                    en += (err_w[q] / sc) ** 2
+                en = math.sqrt(en / n)
+                if en > 1.0:
+                    h = h * max(0.2, 0.9 * en ** -0.2)
+                    n_rej += 1
+                    n_steps += 1
+                    continue
+            if fixed:
+                if hit_grid:
+                    t_new = t_end if n_in > 0 else tg
+                else:
+                    t_new = t + h
+            else:
+                t_new = t_end if t + h >= t_end else t + h
+            if not fixed and t_new == t + h:
+                # first same as last: DP5's stage 7 is f(t + h, s_new), bit for bit
+                for q in range(n):
+                    f1[q] = KS[6, q]
+                st = 0
+            else:
+                # f at the step end (the next step's stage 1), inlined: the same values as deriv
+                st = deriv_plain(t_new, s_new, P_new, dvm, disc, sysa, xc, xp, xtab, f1, KP[0],
+                                 fel)
+                n_rhs += 1
+            if st != 0:
+                status = st
+                break
+            if events_on:
+                for e in range(ne):
+                    if not has_event(etype[e]):
+                        continue
+                    if not _may_cross(e, t, t_new - t, s, s_new, disc, sysa, xc, xp, xtab):
+                        continue
+                    tau, st = _crossing(meth, t, t_new - t, s, s_new, f0, f1, P, dvm, disc, e,
+                                        sysa, xc, xp, xtab, s_try, dummyP, KS, KP, ytmp, Ptmp,
+                                        fel, err_w)
+                    if st != 0:
+                        status = st
+                        break
+                    if tau >= 0.0 and (ev < 0 or tau < tau_ev):
+                        tau_ev = tau
+                        ev = e
+                if status != 0:
+                    break
+                # the start of the graded exit phase: delta falls through d_sw
+                if fixed and graded and n_in == 1 and phase == 0:
+                    if d_sw[pe] > 0.0:
+                        y0, yd0, ydd0, st2 = excite(t, xc, xp, xtab)
+                        y1, yd1, ydd1, st2 = excite(t_new, xc, xp, xtab)
+                        d0, dd0 = kinematics(pe, s, y0, yd0, sysa)
+                        d1, dd1 = kinematics(pe, s_new, y1, yd1, sysa)
+                        if d0 > d_sw[pe] and d1 <= d_sw[pe] and dd0 < 0.0:
+                            tau, st = locate(meth, t, 0.0, t_new - t, d_sw[pe] - d0,
+                                             d_sw[pe] - d1, s, P, dvm, disc, pe, -1.0, d_sw[pe],
+                                             sysa, xc, xp, xtab, f0, s_try, dummyP, KS, KP, ytmp,
+                                             Ptmp, fel, err_w)
+                            if st != 0:
+                                status = st
+                                break
+                            if ev < 0 or tau < tau_ev:
+                                ev = -1
+                                tau_ev = tau
+                                enter_exit = True
+            if ev >= 0 or enter_exit:
+                # re-take the step up to the boundary
+                st = rk_step(meth, t, tau_ev, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
+                             s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+                if st != 0:
+                    status = st
+                    break
+                t_new = t + tau_ev
+                hit_grid = False
+                st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0],
+                           fel)
+                n_rhs += 1
+        # ---- accept the step (t, s) -> (t_new, s_new)
+        n_steps += 1
+        for e in range(ne):
+            if disc[e, 0] != 0.0:
+                steps_in_contact[e] += 1
+        if track_xmax:
+            # the refinement on the dense output only where a velocity changes sign and the
+            # quintic can exceed the current max: |x(theta)| <= max(|x0|, |x1|) + h (|v0| + |v1|)
+            # max|H1| + h^2 (|a0| + |a1|) max|H2| (H0 + H3 = 1, both in [0, 1]; max|H4| = max|H1|
+            # = 16/81, max|H5| = max|H2| = 0.01728), so a skipped refinement could not have
+            # raised xmax: the same xmax bit for bit, without most of the bisections
+            refine = False
+            hh = t_new - t
+            for i in range(N):
+                a = abs(s_new[i])
+                if a > xmax[i]:
+                    xmax[i] = a
+                if s[N + i] * s_new[N + i] < 0.0:
+                    bnd = (max(abs(s[i]), a) + hh * 0.19754 * (abs(s[N + i]) + abs(s_new[N + i]))
+                           + hh * hh * 0.017281 * (abs(f0[N + i]) + abs(f1[N + i])))
+                    if bnd * (1.0 + 1e-12) >= xmax[i]:
+                        refine = True
+            if refine:
+                step_extrema(s, f0, s_new, f1, t_new - t, N, xmax)
+        if fixed and graded and n_in == 1 and disc[pe, 0] != 0.0 and t_new > t:
+            # the maximum penetration of this contact sets where the graded exit phase starts
+            y0, yd0, ydd0, st2 = excite(t, xc, xp, xtab)
+            y1, yd1, ydd1, st2 = excite(t_new, xc, xp, xtab)
+            d0, dd0 = kinematics(pe, s, y0, yd0, sysa)
+            d1, dd1 = kinematics(pe, s_new, y1, yd1, sysa)
+            if dd0 > 0.0 and dd1 <= 0.0:
+                th, dm = delta_extremum(pe, 1.0, t, t_new - t, s, s_new, f0, f1, sysa, xc, xp, xtab)
+                d_sw[pe] = KAPPA * max(dm, d0, d1)
+        # grid samples passed by this step: exact at a grid hit, dense output otherwise
+        while k_grid < n_grid:
+            kk = k_grid + 1
+            tgk = t0 + kk * dt if kk < n_grid else t_end
+            exact = hit_grid and (kk == n_grid or tgk >= t_new - 1e-15 * abs(t_new))
+            if tgk > t_new and not exact:
+                break
+            k_grid = kk
+            if store_every > 0 and (kk % store_every == 0 or kk == n_grid):
+                if exact:
+                    n_stored = _store(n_stored, t_new, s_new, disc, xc, xp, xtab, sysa,
+                                      out_t, out_s, out_d, out_f)
+                else:
+                    th = (tgk - t) / (t_new - t)
+                    for i in range(N):
+                        xk, vk = hermite5(s[i], s[N + i], f0[N + i], s_new[i], s_new[N + i],
+                                          f1[N + i], t_new - t, th)
+                        ytmp[i] = xk
+                        ytmp[N + i] = vk
+                    n_stored = _store(n_stored, tgk, ytmp, disc, xc, xp, xtab, sysa,
+                                      out_t, out_s, out_d, out_f)
+            if exact:
+                break
+        t = t_new
+        for q in range(n):
+            s[q] = s_new[q]
+            f0[q] = f1[q]
+        if want_var:
+            for q in range(n):
+                for c in range(m):
+                    P[q, c] = P_new[q, c]
+        if enter_exit:
+            phase = 2
+            g_u = math.sqrt(d_sw[pe])
+            g_h = g_u / n_grade
+        # ---- switch the discrete state at an event
+        if ev >= 0:
+            y, yd, ydd, st = excite(t, xc, xp, xtab)
+            d, dd = kinematics(ev, s, y, yd, sysa)
+            if n_events < ev_log.shape[0]:
+                ev_log[n_events, 0] = t
+                ev_log[n_events, 1] = ev
+                ev_log[n_events, 2] = 1.0 if disc[ev, 0] == 0.0 else 0.0
+                ev_log[n_events, 3] = dd
+            n_events += 1
+            if abs(d) > max_land:
+                max_land = abs(d)
+            if disc[ev, 0] == 0.0:
+                disc[ev, 0] = 1.0
+                disc[ev, 1] = dd if dd > VMINUS_FLOOR else VMINUS_FLOOR
+                n_imp += 1
+                steps_in_contact[ev] = 0
+                d_sw[ev] = -1.0
+                dd2 = sysa.ewy[ev] * ydd
+                for j in range(N):
+                    dd2 += sysa.ew[ev, j] * f0[N + j]
+                dtc[ev] = contact_step(ev, disc[ev, 1], dd2, sysa, spc)
+                if fixed and dtc[ev] > dt:
+                    dtc[ev] = dt  # a soft contact never gets a longer step than free flight
+                if want_var:
+                    # sensitivity of the onset velocity: d vminus = [0,w] P + delta'' dt_e,
+                    # dt_e = -([w,0] P) / delta'
+                    ew = sysa.ew
+                    dd2 = sysa.ewy[ev] * ydd
+                    for j in range(N):
+                        dd2 += ew[ev, j] * f0[N + j]
+                    for c in range(m):
+                        wx = 0.0
+                        wv = 0.0
+                        for j in range(N):
+                            wx += ew[ev, j] * P[j, c]
+                            wv += ew[ev, j] * P[N + j, c]
+                        dvm[ev, c] = wv - dd2 * wx / disc[ev, 1]
+                if fixed and graded and dd > 0.0 and n_in == 0:
+                    phase = 1
+                    pe = ev
+                    g_t0 = t
+                    g_u = 0.0
+                    g_end = math.sqrt(n_grade * dtc[ev])
+                    g_h = g_end / n_grade
+                else:
+                    phase = 0
+            else:
+                disc[ev, 0] = 0.0
+                if from_before[ev]:
+                    from_before[ev] = False
+                else:
+                    n_contacts += 1
+                    if steps_in_contact[ev] < min_spc:
+                        min_spc = steps_in_contact[ev]
+                dtc[ev] = np.inf
+                d_sw[ev] = -1.0
+                phase = 0
+            # f0 after the switch (the field is continuous; the law's memory changed)
+            st = deriv(t, s, P, dvm, disc, False, sysa, xc, xp, xtab, f0, KP[0], fel)
+            n_rhs += 1
+        if k_grid >= n_grid:
+            t = t_end
+        if not fixed:
+            if en == 0.0:
+                fac = 5.0
+            else:
+                fac = min(5.0, max(0.2, 0.9 * en ** -0.2))
+            h = h * fac
+            if ev >= 0:
+                h = min(h, max(1e-3 * dt, 1e-9))
+
+    for q in range(n):
+        s_end[q] = s[q]
+        for c in range(m):
+            P_end[q, c] = P[q, c]
+    for e in range(ne):
+        disc_end[e, 0] = disc[e, 0]
+        disc_end[e, 1] = disc[e, 1]
+        for c in range(m):
+            dvm_end[e, c] = dvm[e, c]
+    counters[0] = n_stored
+    counters[1] = n_steps
+    counters[2] = n_rej
+    counters[3] = n_rhs
+    counters[4] = n_imp
+    counters[5] = min_spc if n_contacts > 0 else -1
+    counters[6] = n_contacts
+    counters[7] = n_events
+    fcounters[0] = t
+    fcounters[1] = max_land
+    return status
