@@ -61,8 +61,9 @@ def main(argv=None):
                               args.duration, transient, channels=("delta", "y"),
                               psd_resolution=resolution)
     files_backend()
-    save_figure(response_psd(measured, "delta", reference=sim, reference_label="simulation", mark_peaks=None,
-                             f_max=250.0), os.path.join(args.out, "measured_psd_delta.png"))
+    fig = response_psd(measured, "delta", reference=sim, reference_label="simulation",
+                       mark_peaks=None, f_max=250.0)
+    save_figure(fig, os.path.join(args.out, "measured_psd_delta.png"))
     fig = pdf(measured, "delta")
     c, d = sim.pdf("delta")
     fig.axes[0].step(c * 1e3, d / 1e3, where="mid", color="C1", lw=1.0, label="simulation")
