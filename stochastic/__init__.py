@@ -15,3 +15,6 @@ __all__ = ["BandLimitedNoise", "SpectralNoise", "Realization", "Recorded", "herm
 from .simulate import EnsembleResult, StochasticResult, ensemble, load, simulate  # noqa: E402
 
 __all__ += ["simulate", "StochasticResult", "load", "ensemble", "EnsembleResult"]
+from .analyze import analyze  # noqa: E402
+
+__all__ += ["analyze"]

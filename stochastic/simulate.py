@@ -19,7 +19,7 @@ import numpy as np
 from nlbeam._validate import nonnegative, positive
 from nlbeam.vocabulary import CHANNELS
 
-from .estimators import StreamingHistogram, StreamingMoments, WelchPSD
+from .assemble import feed, make_estimators, store_results
 
 __all__ = ["simulate", "StochasticResult", "load", "ensemble", "EnsembleResult",
            "default_transient"]
@@ -319,16 +319,7 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
         def progress(done, total):  # noqa: F811 - the printing default
             print(f"stochastic.simulate: {done:.4g} / {total:.4g} s", file=sys.stderr)
 
-    est = {}
-    for ch in channels:
-        e = {}
-        if "psd" in outputs:
-            e["psd"] = WelchPSD(fs, psd_resolution)
-        if "pdf" in outputs:
-            e["pdf"] = StreamingHistogram(pdf_edges, bins=pdf_bins, batch_size=batch)
-        if "moments" in outputs:
-            e["moments"] = StreamingMoments(batch_size=batch)
-        est[ch] = e
+    est = make_estimators(channels, outputs, fs, psd_resolution, pdf_edges, pdf_bins, batch)
     hist_parts = {"t": []}
     hist_parts.update({ch: [] for ch in channels})
 
@@ -412,8 +403,7 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
             n_samples += sel.size
             for ch, (kind, i) in parsed.items():
                 data = np.ascontiguousarray(_extract(tr, kind, i, sel))
-                for e in est[ch].values():
-                    e.update(data)
+                feed(est[ch], data)
                 if keep_history is not None:
                     hsel = (tr.t[sel] >= h0) & (tr.t[sel] <= h1)
                     if np.any(hsel):
@@ -437,14 +427,7 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     # windows cover at least two of them (stochastic.errors)
     span = getattr(excitation, "realization_duration", None)
     min_window = None if span is None else int(math.ceil(2.0 * span * fs))
-    for ch in channels:
-        e = est[ch]
-        if "psd" in e:
-            res.psd_data[ch] = e["psd"].result()
-        if "pdf" in e:
-            res.pdf_data[ch] = e["pdf"].result(min_window=min_window)
-        if "moments" in e:
-            res.moment_data[ch] = e["moments"].result(min_window=min_window)
+    store_results(res, est, min_window)
     if keep_history is not None:
         res.history = {k: (np.concatenate(v) if v else np.zeros(0)) for k, v in hist_parts.items()}
     res.n_impacts, res.n_steps, res.n_chunks, res.n_samples = n_impacts, n_steps, n_chunks, n_samples

@@ -1,4 +1,4 @@
-"""Command line: ``nlbeam demo | frc | simulate | compare | identify | run | figures``.
+"""Command line: ``nlbeam demo | frc | simulate | compare | analyze | identify | run | figures``.
 
 Units everywhere: SI (m, s, kg, N), frequencies in Hz. Progress goes to stderr; ``--quiet``
 silences it. A warning is one line on stderr (``nlbeam CMD: warning: ...``), --quiet or not. On
@@ -150,6 +150,32 @@ def _identify(args):
 
         files_backend()
         save_figure(plot_contact_fit(fit, d, r, f), args.plot)
+    return 0
+
+
+def _analyze(args):
+    import stochastic
+
+    from .files.columns import read_columns
+
+    cols = read_columns(args.file, required=(args.time_column, *args.channels))
+    res = stochastic.analyze(cols[args.time_column], {c: cols[c] for c in args.channels},
+                             psd_resolution=args.psd_resolution, pdf_bins=args.pdf_bins,
+                             resample=args.resample, band=args.band,
+                             description={"source": os.path.basename(args.file)})
+    res.save(args.out)
+    _log(args)(f"nlbeam analyze: {res.n_samples} samples at {res.fs:.6g} Hz (resampled: "
+               f"{res.excitation_description['resample']}) -> {args.out}")
+    if not args.quiet:
+        from .plots.units import channel_unit
+
+        for ch in res.channels:
+            mo = res.moments(ch)
+            u = channel_unit(ch)[0]
+            print(f"{ch:6s} mean {mo['mean']:+.4e} +- {mo['se_mean']:.1e} {u}  std "
+                  f"{mo['std']:.4e} +- {mo['se_std']:.1e} {u}  skewness {mo['skewness']:+.3f} "
+                  f"+- {mo['se_skewness']:.3f}  kurtosis {mo['kurtosis']:.3f} "
+                  f"+- {mo['se_kurtosis']:.3f}")
     return 0
 
 
@@ -352,6 +378,30 @@ def _parser():
                    help="upper frequency (Hz) of the peaks considered and of the plot, default all")
     p.add_argument("--plot", default=None, help="write the comparison figure (PNG/PDF/SVG)")
     p.set_defaults(func=_compare)
+
+    p = sub.add_parser("analyze", parents=[common], help="statistics (PSD, PDF, moments) of a "
+                       "measured record, as nlbeam simulate writes them",
+                       description="Read a time column and channel columns from a CSV file with "
+                       "a header line (or an HDF5 file with one dataset per column) and write "
+                       "the statistics file of nlbeam simulate (Welch PSD, histogram PDF, "
+                       "moments with standard errors), which nlbeam compare and the figures "
+                       "accept. The column names are the channel names (x, v, y, yd, delta, "
+                       "force, optionally indexed like x[1]). A non-uniform record is resampled "
+                       "onto its median step. See stochastic.analyze. " + _UNITS)
+    p.add_argument("file", help="CSV (header line with the column names) or HDF5 file")
+    p.add_argument("--channels", nargs="+", required=True,
+                   help=f"columns to analyse, named as channels: any of {', '.join(CHANNELS)}")
+    p.add_argument("--time-column", default="t", help="time column (s), default t")
+    p.add_argument("--psd-resolution", type=float, default=None,
+                   help="Welch bin (Hz), default max(0.05, 16 / duration)")
+    p.add_argument("--pdf-bins", type=int, default=200, help="histogram bins, default 200")
+    p.add_argument("--resample", default="linear", choices=("linear", "cubic"),
+                   help="interpolation of a non-uniform record onto its median step, "
+                   "default linear")
+    p.add_argument("--band", type=float, nargs=2, default=None, metavar=("LO", "HI"),
+                   help="excitation band (Hz), recorded for nlbeam compare; default none")
+    p.add_argument("--out", default="stats.h5", help="HDF5 statistics file, default stats.h5")
+    p.set_defaults(func=_analyze)
 
     p = sub.add_parser("identify", parents=[common], help="estimate the contact law's "
                        "parameters (K_hertz, e or mu) from measured collisions",

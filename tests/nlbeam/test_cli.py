@@ -69,7 +69,8 @@ def test_demo_is_a_short_nlbeam_figures(tmp_path, capsys):
     assert not (tmp_path / "bad").exists()
 
 
-@pytest.mark.parametrize("cmd", [[], ["frc"], ["simulate"], ["run"], ["figures"], ["compare"]])
+@pytest.mark.parametrize("cmd", [[], ["frc"], ["simulate"], ["run"], ["figures"], ["compare"],
+                                 ["analyze"]])
 def test_help_explains_units(cmd, capsys):
     with pytest.raises(SystemExit) as e:
         main(cmd + ["--help"])

@@ -133,7 +133,8 @@ def pdf(result, ch="delta", *, ax=None, path=None, log=False):
     mo = result.moments(ch)
     _, unit, sc = channel_unit(ch, _kind(result))
     fig, ax, opened = _figure(ax)
-    ax.step(c * sc, d / sc, where="mid", color="C0", lw=1.0, label="simulated")
+    label = "measured" if result.method == "measured" else "simulated"
+    ax.step(c * sc, d / sc, where="mid", color="C0", lw=1.0, label=label)
     g = np.exp(-0.5 * ((c - mo["mean"]) / mo["std"]) ** 2) / (mo["std"] * np.sqrt(2 * np.pi))
     ax.plot(c * sc, g / sc, color="k", ls="--", lw=1.0, label="Gaussian, same mean and std")
     if log:
