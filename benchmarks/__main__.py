@@ -8,8 +8,6 @@ multi-mode beam's cost and convergence in the number of modes, and a 10^4 s stoc
 (energy balance, moments, memory); records the machine and versions at the top. Each study's own output is kept verbatim.
 """
 import argparse
-import contextlib
-import io
 import os
 import platform
 import subprocess

@@ -17,7 +17,6 @@ import sys
 import time
 import warnings
 
-import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.append(ROOT)  # an installed / PYTHONPATH nlbeam takes precedence

@@ -18,7 +18,6 @@ import warnings
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.append(ROOT)  # an installed / PYTHONPATH nlbeam takes precedence
 
-import numpy as np  # noqa: E402
 
 import nlbeam  # noqa: E402
 

@@ -54,7 +54,7 @@ def main(argv=None):
     dt = nlbeam.default_dt(model, noise, args.method)
     transient = 10.0
     chunk = noise.block_duration
-    m, b, k = model.m, model.b, model.k
+    b, k = model.b, model.k
 
     nlbeam.integrate(model, _chunk_excitation(noise, 0.0, 0.1), 0.1, method=args.method, dt=dt)
     rss0 = rss_mib()

@@ -274,7 +274,7 @@ def main():
             sc[r[1]][0].append(r[3])
             sc[r[1]][1].append(r[4])
     print()
-    print(f"| nlbeam | settings | error | CPU (ms) | best scipy at that error | scipy CPU (ms) | ratio |")
+    print("| nlbeam | settings | error | CPU (ms) | best scipy at that error | scipy CPU (ms) | ratio |")
     print("|---|---|---|---|---|---|---|")
     for r in rows:
         if r[0] != "nlbeam":
