@@ -19,11 +19,11 @@ regular root), folds as the turning point of the branch (the extremum of the par
 it, by successive parabolic interpolation on hyperplanes normal to the tangent: it needs no
 monodromy, so it is the fold of the discrete map even where the variational monodromy is off;
 located at level 0 too), grazing points by bisection on the number of impacts per period
-(level 0 too; the diagram's bracket is wide). ``combine`` turns the values per level into the
-reported value and its stated error: with one finer level the finer value, error half the
-change (order >= 1.6 assumed); with clean convergence over three or more levels (ratio of
-successive changes 3-40) the Richardson extrapolant, error 1.25 times its distance from the
-finest value (Roache's grid convergence index) or, with four or more levels, the change of the
+(level 0 too, where the diagram's bracket is wide). ``combine`` turns the values per level
+into the reported value and its stated error: the finest value, error half the last change
+with one finer level (order >= 1.6 assumed), 1.25 |d| / (r - 1) with the observed ratio r of
+successive changes (Roache's grid convergence index) when it shows clean convergence (3-40);
+with two clean ratios (four levels) the Richardson extrapolant, error the change of the
 extrapolant; never below 2e-9 relative (the solves' own resolution). Levels are added until
 the stated error meets the target (``accuracy``: 6 significant digits by default, 8 with
 'high'). ``estimate_diagram`` does all of this for a FrequencyResponse.
@@ -153,9 +153,10 @@ def _critical(kind, mu):
     return float(np.abs(cplx[np.argmin(np.abs(np.abs(cplx) - 1.0))]) - 1.0)
 
 
-def _secant_regular(prob, u0, p0, kind, tol=1e-10, max_iter=12):
+def _secant_regular(prob, u0, p0, kind, hint, tol=1e-10, max_iter=12):
     """Period doubling / Neimark-Sacker of prob near p0 by the secant method in p on the
-    critical multiplier (orbits solved at fixed p by Newton). Returns (p, u)."""
+    critical multiplier (orbits solved at fixed p by Newton), the first step with the slope
+    found at the previous level (``hint['slope']``, updated). Returns (p, u)."""
     def g_at(u, p):
         u, ev, _, _ = prob.solve(u, p, tol=tol, max_iter=10)
         if not ev.Ms:
@@ -164,7 +165,10 @@ def _secant_regular(prob, u0, p0, kind, tol=1e-10, max_iter=12):
 
     ga, ua = g_at(u0, p0)
     pa = p0
-    for h in (1e-7, -1e-7, 1e-9, -1e-9):  # a period doubling may lie next to a fold
+    steps = [1e-7, -1e-7, 1e-9, -1e-9]  # relative; a period doubling may lie next to a fold
+    if hint.get("slope") and abs(ga / hint["slope"]) < 1e-3 * abs(p0):
+        steps.insert(0, -ga / hint["slope"] / p0)
+    for h in steps:
         pb = p0 * (1.0 + h) if p0 != 0 else h
         try:
             gb, ub = g_at(ua, pb)
@@ -174,16 +178,19 @@ def _secant_regular(prob, u0, p0, kind, tol=1e-10, max_iter=12):
     else:
         raise ConvergenceError(f"{kind}: no orbit next to {p0:.9g} at this level")
     for _ in range(max_iter):
-        if gb == ga:
+        if abs(pb - pa) <= 1e-12 * abs(pb) or gb == 0.0:
             break
+        if gb == ga:
+            raise ConvergenceError(f"{kind}: the critical multiplier does not change with the "
+                                   f"parameter near {p0:.9g}")
         pc = pb - gb * (pb - pa) / (gb - ga)
         if not math.isfinite(pc) or abs(pc - p0) > 0.02 * abs(p0):
             raise ConvergenceError(f"{kind}: the secant left the neighbourhood of {p0:.9g}")
         uc = ub + (ub - ua) * (pc - pb) / (pb - pa)
         gc, uc = g_at(uc, pc)
         pa, ga, ua, pb, gb, ub = pb, gb, ub, pc, gc, uc
-        if abs(pb - pa) <= 1e-13 * abs(pb) or gb == 0.0:
-            break
+    if gb != ga and pb != pa:
+        hint["slope"] = (gb - ga) / (pb - pa)
     return pb, ub
 
 
@@ -318,42 +325,40 @@ def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60):
     return 0.5 * (lo[0] + hi[0]), near[1], 0.5 * (hi[0] - lo[0])
 
 
-def _locate(kind, prob, u, p, width, resolution):
-    """(p, u, half-width of the final bracket) of the bifurcation of this kind near p."""
+def _locate(kind, prob, u, p, width, resolution, hint):
+    """(p, u, half-width of the final bracket) of the bifurcation of this kind near p (hint:
+    a dict carried from level to level)."""
     if kind == "grazing":
         return _grazing_bisect(prob, u, p, width, resolution)
     if kind == "fold":
         return (*_fold_turning_point(prob, u, p), 0.0)
-    return (*_secant_regular(prob, u, p, kind), 0.0)
+    return (*_secant_regular(prob, u, p, kind, hint), 0.0)
 
 
 def combine(values, floor=2e-9):
     """(value, error) from the values of one quantity at levels 0, 1, ..., K (each step half
-    the previous). With the ratios r of successive differences between 3 and 40 (clean
-    convergence of order 1.6-5.3): the Richardson extrapolant E_K = v_K + d_K / (r - 1), its
-    error |E_K - E_{K-1}| when two extrapolants exist, else 1.25 |d_K| / (r - 1) (the error of
-    v_K itself, with the safety factor of Roache's grid convergence index). Otherwise the
-    finest value v_K, error |d_K| / 2 for K = 1 (order >= 1.6 assumed) and |d_K| for K >= 2.
-    Never below ``floor`` |value| (the solves' own resolution)."""
+    the previous), d_k = v_k - v_(k-1), r_k = d_(k-1) / d_k; a ratio is clean when 3 <= r <= 40
+    (convergence of order 1.6-5.3). K >= 3 with the last two ratios clean: the Richardson
+    extrapolant E_K = v_K + d_K / (r_K - 1), error |E_K - E_(K-1)|. Else the finest value
+    v_K: with the last ratio clean, error 1.25 |d_K| / (r_K - 1) (Roache's grid convergence
+    index); K = 1, error |d_1| / 2 (order >= 1.6 assumed); otherwise |d_K|. Never below
+    ``floor`` |value| (the solves' own resolution)."""
     v = np.asarray(values, dtype=float)
     if len(v) < 2:
         return float(v[-1]), float("nan")
     d = np.diff(v)
-    ext = []
-    for i in range(1, len(d)):
-        r = d[i - 1] / d[i] if d[i] != 0.0 else np.inf
-        ext.append(v[i + 1] + d[i] / (r - 1.0) if 3.0 <= r <= 40.0 else None)
-    if ext and ext[-1] is not None:
-        value = float(ext[-1])
-        if len(ext) >= 2 and ext[-2] is not None:
-            error = abs(ext[-1] - ext[-2])
-        else:
-            error = 1.25 * abs(value - v[-1])
+    r = [d[i - 1] / d[i] if d[i] != 0.0 else np.inf for i in range(1, len(d))]
+    clean = [3.0 <= x <= 40.0 for x in r]
+    if len(r) >= 2 and clean[-1] and clean[-2]:
+        e_k = v[-1] + d[-1] / (r[-1] - 1.0)
+        e_prev = v[-2] + d[-2] / (r[-2] - 1.0)
+        value, error = float(e_k), abs(e_k - e_prev)
+    elif r and clean[-1]:
+        value, error = float(v[-1]), 1.25 * abs(d[-1]) / (r[-1] - 1.0)
     elif len(d) >= 2 and d[-1] == 0.0:  # no change at the last level
         value, error = float(v[-1]), abs(d[-2]) / 8.0
     else:
-        value = float(v[-1])
-        error = abs(d[-1]) * (0.5 if len(d) == 1 else 1.0)
+        value, error = float(v[-1]), abs(d[-1]) * (0.5 if len(d) == 1 else 1.0)
     return value, float(max(error, floor * abs(value)))
 
 
@@ -372,7 +377,7 @@ class BifurcationLevels:
 
 # the kinds whose diagram value is not the level-0 value of the method used at the finer levels
 # (folds: the diagram's test function uses the variational monodromy, the turning point not;
-# grazing points: the diagram's bracket is wider), located again at level 0
+# grazing points: the diagram's bracket may be wide), located again at level 0
 _RELOCATE_LEVEL0 = ("fold", "grazing")
 
 
@@ -380,18 +385,23 @@ def bifurcation_levels(model, amplitude, bif, integrator, *, parameter="frequenc
                        max_levels=4, segments=1):
     """Locate the bifurcation ``bif`` (a continuation.Bifurcation of a diagram computed with
     ``integrator``) at levels 1, 2, ... until the stated error is at most 10^-digits |value|
-    (at least one level, at most ``max_levels``); folds and grazing points at level 0 too
-    (their diagram values come from another criterion or a wider bracket). Returns a
+    (at least one level, at most ``max_levels``); folds, and grazing points whose bracket is
+    wider than half the target, at level 0 too (their diagram values come from another
+    criterion or a wider bracket). Returns a
     BifurcationLevels; a level that does not converge ends the sequence (``failed`` says why;
     with fewer than two levels the error is NaN)."""
     if bif.kind not in KINDS_LOCATED:
         raise ValueError(f"bif.kind: must be one of {KINDS_LOCATED}, got {bif.kind!r}")
     p = float(bif.value)
     relocate = bif.kind in _RELOCATE_LEVEL0
+    if bif.kind == "grazing" and math.isfinite(bif.tolerance) \
+            and bif.tolerance <= 0.5 * 10.0 ** -digits * abs(p):
+        relocate = False  # the diagram's bracket is narrow enough
     values = [] if relocate else [p]
     value, error = p, float("nan")
     failed = ""
     prob = u = None
+    hint = {}
     width = max(float(bif.tolerance) if math.isfinite(bif.tolerance) else 0.0,
                 0.5 * 10.0 ** -digits * abs(p))
     for k in range(0 if relocate else 1, max_levels + 1):
@@ -401,7 +411,7 @@ def bifurcation_levels(model, amplitude, bif, integrator, *, parameter="frequenc
                                          segments)
             else:
                 prob = at_level(prob, 1)
-            p, u, half = _locate(bif.kind, prob, u, p, width, 0.5 * 10.0 ** -digits)
+            p, u, half = _locate(bif.kind, prob, u, p, width, 0.5 * 10.0 ** -digits, hint)
         except (ConvergenceError, ValueError) as exc:
             failed = f"level {k}: {exc}"
             break
@@ -458,7 +468,9 @@ def branch_errors(model, branch, integrator, *, every=10):
     for i in sample_indices(n, every):
         try:
             prob, u, p = _branch_problem(model, branch, i, integrator)
-            u, ev, _, _ = prob.solve(u, p, max_iter=6)
+            ev = prob.evaluate(u, p, jac=True, jac_p=False)
+            if np.max(np.abs(ev.R / prob.scale_u)) > 1e-9:  # not the stored discretization
+                u, ev, _, _ = prob.solve(u, p, max_iter=6)
             mu = prob.multipliers(ev.Ms) if ev.Ms else None
             oe = orbit_error(prob, u, p, ev.xmax, mu, max_iter=8)
         except (ConvergenceError, ValueError):
