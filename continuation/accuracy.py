@@ -387,14 +387,17 @@ def bifurcation_levels(model, amplitude, bif, integrator, *, parameter="frequenc
     ``integrator``) at levels 1, 2, ... until the stated error is at most 10^-digits |value|
     (at least one level, at most ``max_levels``); folds, and grazing points whose bracket is
     wider than half the target, at level 0 too (their diagram values come from another
-    criterion or a wider bracket). Returns a
+    criterion or a wider bracket); one reported at a grazing point (``smooth`` False) as a
+    grazing point. Returns a
     BifurcationLevels; a level that does not converge ends the sequence (``failed`` says why;
     with fewer than two levels the error is NaN)."""
     if bif.kind not in KINDS_LOCATED:
         raise ValueError(f"bif.kind: must be one of {KINDS_LOCATED}, got {bif.kind!r}")
     p = float(bif.value)
-    relocate = bif.kind in _RELOCATE_LEVEL0
-    if bif.kind == "grazing" and math.isfinite(bif.tolerance) \
+    # a bifurcation reported at a grazing point (a multiplier jumps there) is located as one
+    kind = bif.kind if getattr(bif, "smooth", True) else "grazing"
+    relocate = kind in _RELOCATE_LEVEL0
+    if kind == "grazing" and math.isfinite(bif.tolerance) \
             and bif.tolerance <= 0.5 * 10.0 ** -digits * abs(p):
         relocate = False  # the diagram's bracket is narrow enough
     values = [] if relocate else [p]
@@ -411,7 +414,7 @@ def bifurcation_levels(model, amplitude, bif, integrator, *, parameter="frequenc
                                          segments)
             else:
                 prob = at_level(prob, 1)
-            p, u, half = _locate(bif.kind, prob, u, p, width, 0.5 * 10.0 ** -digits, hint)
+            p, u, half = _locate(kind, prob, u, p, width, 0.5 * 10.0 ** -digits, hint)
         except (ConvergenceError, ValueError) as exc:
             failed = f"level {k}: {exc}"
             break
@@ -500,8 +503,9 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segment
     gets xmax_error, multipliers_error and error_sampled (``branch_errors``); each fold, period
     doubling and Neimark-Sacker point is located again at levels 1, 2, ... (at most
     ``max_levels``) until its stated error meets the target digits of ``accuracy``, grazing
-    points at levels 0 and 1 only (``grazing_levels``): its ``value`` (and ``frequency`` for a
-    frequency diagram) becomes the reported value of ``bifurcation_levels``, ``error`` its
+    points (and bifurcations reported at one) at levels 0 and 1 only (``grazing_levels``): its
+    ``value`` (and ``frequency`` for a frequency diagram) becomes the reported value of
+    ``bifurcation_levels``, ``error`` its
     error estimate, ``levels`` the values per level; ``tolerance`` stays the width of the
     diagram's bracket. Returns a message for one warning ('' if all is met): sampled branch
     points whose multiplier error exceeds 10^-(digits - 1), bifurcations that could not be
@@ -525,10 +529,10 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segment
     for bf in frc.bifurcations:
         if bf.kind not in KINDS_LOCATED:
             continue
+        at_grazing = bf.kind == "grazing" or not getattr(bf, "smooth", True)
         lv = bifurcation_levels(model, frc.amplitude, bf, integrator, parameter=frc.parameter,
                                 digits=digits, segments=segments,
-                                max_levels=grazing_levels if bf.kind == "grazing"
-                                else max_levels)
+                                max_levels=grazing_levels if at_grazing else max_levels)
         bf.levels = lv.values
         bf.error = lv.error
         if not math.isfinite(lv.error):
@@ -537,7 +541,7 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segment
         bf.value = lv.value
         if frc.parameter == "frequency":
             bf.frequency = lv.value
-        if bf.kind != "grazing" and lv.error > 10.0 ** -digits * abs(lv.value):
+        if not at_grazing and lv.error > 10.0 ** -digits * abs(lv.value):
             above.append(bf)
     parts = []
     if n_bad:
@@ -546,7 +550,8 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segment
                      f"{worst[2] + 1}, order {worst[3]})")
     for kinds, what in ((("fold", "period-doubling", "neimark-sacker"), "fold/PD/NS"),
                         (("grazing",), "grazing")):
-        f_ = [b.value for b in failed if b.kind in kinds]
+        f_ = [b.value for b in failed
+              if (b.kind if getattr(b, "smooth", True) else "grazing") in kinds]
         if f_:
             parts.append(f"{len(f_)} {what} point(s) could not be located again with a finer "
                          f"step (error NaN): at {_short(f_)}")
