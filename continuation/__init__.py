@@ -3,7 +3,9 @@
 Front door: ``periodic_solution`` (shooting), ``frequency_response`` and ``continue_parameter``
 (pseudo-arclength path following with bifurcation detection), ``refine_bifurcations``
 (folds and period doublings to 7-9 digits by an extended system, step refinement and Richardson
-extrapolation), ``load``. The figures (``continuation.plot``) and the HDF5 files (``save``,
+extrapolation), ``load``. Every periodic solution, branch point and bifurcation carries an
+error estimate from a solve with the step halved (``continuation.accuracy``; ``accuracy=``
+asks for more digits). The figures (``continuation.plot``) and the HDF5 files (``save``,
 ``load``) live on the application floor, nlbeam.app; importing this package loads neither
 matplotlib nor h5py.
 Units: Hz, m (N for force excitation), s.

@@ -28,7 +28,12 @@ class Branch:
     'closed', 'stop' (ran onto a traced branch, or a switched branch back at its period
     doubling), 'period-doubling' (the first point of a switched branch), 'step underflow'
     (the corrector failed at every step size down to ds_min: a non-smooth or too unstable
-    map), 'no progress', 'max_points', 'could not move the segment boundaries'; '' unknown)."""
+    map), 'no progress', 'max_points', 'could not move the segment boundaries'; '' unknown).
+    Accuracy (continuation.accuracy.branch_errors): xmax_error (n,) m and multipliers_error
+    (n,) (the largest over each point's multipliers; None without stability) estimate the
+    integration's error, computed at the points where error_sampled (n,) is True (every 10th,
+    the ends) and elsewhere the larger estimate of the two nearest sampled points; None when
+    not estimated (accuracy='off')."""
 
     order: int
     parameter: str
@@ -43,6 +48,9 @@ class Branch:
     boundaries: np.ndarray
     origin: str = "start"
     ends: tuple = ("", "")
+    xmax_error: np.ndarray | None = None
+    multipliers_error: np.ndarray | None = None
+    error_sampled: np.ndarray | None = None
 
 
 @dataclass
@@ -50,14 +58,19 @@ class Bifurcation:
     """kind: 'fold', 'period-doubling', 'neimark-sacker' or 'grazing' (the number of impacts per
     period changes: an orbit touches a stop with zero velocity; the flow map has a square-root
     singularity there and the branch is continued past it by a jump, see Tracer.jump);
-    frequency (Hz) and value of the continued parameter at the point, located to ``tolerance``
-    (width of the final bracket in the parameter; it does not include the integrator's error,
-    see docs/continuation_report.md for the convergence under step refinement); xmax (m);
-    order of the branch it lies on; branch index; multipliers (for a grazing point: those of
-    the branch point on the far side of the bracket; None without stability); note: '' for a
-    bifurcation of the smooth map, or 'at grazing: multiplier jumps from .. to ..
-    (non-smooth)' where a multiplier jumps through +1, -1 or the unit circle at a grazing
-    point (reported there, with the grazing bracket as tolerance; see Tracer._detect_step)."""
+    frequency (Hz) and value of the continued parameter at the point; error: the estimated
+    error of ``value`` (Hz for a frequency diagram) due to the integration, from the point
+    located again with the step halved (continuation.accuracy.bifurcation_levels; the value is
+    then the finer or extrapolated one; NaN when not estimated: accuracy='off', or the point
+    could not be located at a finer step, which the diagram's warning lists) or from
+    refine_bifurcations; levels: the values at the successive step halvings (not saved);
+    tolerance: width of the tracer's final bracket on the diagram's own branch (where it
+    located the point; not an error bar); xmax (m); order of the branch it lies on; branch
+    index; multipliers (for a grazing point: those of the branch point on the far side of the
+    bracket; None without stability); note: '' for a bifurcation of the smooth map, or 'at
+    grazing: multiplier jumps from .. to .. (non-smooth)' where a multiplier jumps through +1,
+    -1 or the unit circle at a grazing point (reported there, with the grazing bracket as
+    tolerance; see Tracer._detect_step; its error is that of the grazing point)."""
 
     kind: str
     frequency: float
@@ -69,11 +82,12 @@ class Bifurcation:
     multipliers: np.ndarray
     state0: np.ndarray | None = None
     disc0: np.ndarray | None = None  # contact state at t = 0 when inside a contact (LN memory)
-    integrator_error: float = float("nan")  # estimate, set by refine_bifurcations
+    error: float = float("nan")
     refined: object = None  # a continuation.refine.Refined, set by refine_bifurcations
     note: str = ""  # see the class doc; for a grazing point 'k changes of the number of
     # impacts within the bracket' where k close ones were merged (Tracer steps may or may not
     # resolve them one by one)
+    levels: np.ndarray | None = None
 
     @property
     def smooth(self):
@@ -618,7 +632,8 @@ def _superharmonics(branches, model, integrator, orders=(2, 3), window=0.15, min
 def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30, segments=1,
                        integrator=None, switch=True, brute_force_grid=True, starts=(),
                        ds=0.02, ds_max=0.5, max_angle=0.2, max_points=1000, tol=1e-10,
-                       bif_tol=1e-8, stability=True, progress=None, **integrator_kw):
+                       bif_tol=1e-8, stability=True, progress=None, accuracy=None,
+                       **integrator_kw):
     """The |x|max-versus-frequency diagram at excitation amplitude (m, or N for force).
 
     f_range: (f_lo, f_hi) Hz. Branches of each order in ``orders`` start from periodic
@@ -636,6 +651,14 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
     stability (the same discrete orbits).
     progress: callable(str), called with a one-line status after the brute-force grid and after
     each branch (its range in Hz, points, bifurcations, elapsed s); None for silence.
+    accuracy: None or 'default' (6 significant digits), 'high' (8), a number of digits, or
+    'off': every fold, period doubling and Neimark-Sacker point is located again with the step
+    halved, quartered, ... until its stated ``error`` (Hz) meets that many digits (its
+    frequency becomes the finer, extrapolated value); grazing points are located once more
+    with the step halved; every branch point gets error estimates of xmax and of the
+    multipliers (computed at every 10th point; continuation.accuracy.estimate_diagram). One
+    ContinuationWarning lists what misses the target (multipliers: 10^-(digits - 1)); the
+    branch points stay those of the integrator (dt_scale, steps_per_contact) given.
     Returns a FrequencyResponse (``settings['stability']`` says which).
     """
     integrator = integrator or Integrator(**integrator_kw)
@@ -658,17 +681,19 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
                             settings=dict(_settings(integrator, segments, n_grid, ds, ds_max,
                                                     max_angle, tol, bif_tol, orders),
                                           stability=int(bool(stability))))
-    frc.wall_time = time.perf_counter() - t0
     frc.n_points = int(sum(len(b.values) for b in branches))
+    _estimate(frc, model, integrator, accuracy, segments, progress)
+    frc.wall_time = time.perf_counter() - t0
     return frc
 
 
 def continue_parameter(solution, parameter, p_range, *, model, segments=1, integrator=None,
                        ds=0.02, ds_max=0.5, max_angle=0.2, max_points=1000, tol=1e-10,
-                       bif_tol=1e-8, **integrator_kw):
+                       bif_tol=1e-8, accuracy=None, **integrator_kw):
     """Follow a PeriodicSolution of ``model`` in ``parameter`` ('amplitude', 'frequency', or a
     model field such as 'e' or 'K_hertz') over p_range, both ways. Returns a FrequencyResponse
-    with one branch (and the bifurcations on it)."""
+    with one branch (and the bifurcations on it). accuracy: as for frequency_response (errors
+    in the units of the parameter)."""
     integrator = integrator or Integrator(**integrator_kw)
     lo, hi = map(float, p_range)
     tracer = Tracer(p_min=lo, p_max=hi, ds=ds, ds_max=ds_max, max_angle=max_angle,
@@ -690,9 +715,35 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
                             bifurcations=bifs,
                             settings=_settings(integrator, segments, 0, ds, ds_max, max_angle,
                                                tol, bif_tol, (solution.order,)))
-    frc.wall_time = time.perf_counter() - t0
     frc.n_points = len(br.values)
+    _estimate(frc, model, integrator, accuracy, segments, None)
+    frc.wall_time = time.perf_counter() - t0
     return frc
+
+
+def _estimate(frc, model, integrator, accuracy, segments, progress):
+    """Error estimates of the diagram's points and bifurcations (continuation.accuracy), one
+    ContinuationWarning listing what misses the target; settings['accuracy'] says which."""
+    if isinstance(accuracy, str) and accuracy == "off":
+        frc.settings["accuracy"] = "off"
+        return
+    from .accuracy import estimate_diagram, target_digits
+
+    digits = target_digits(accuracy)
+    frc.settings["accuracy"] = digits
+    t = time.perf_counter()
+    notes = estimate_diagram(frc, model, integrator, accuracy=accuracy, segments=segments)
+    if progress is not None:
+        progress(f"error estimates: {len(frc.bifurcations)} bifurcations, "
+                 f"{sum(int(b.error_sampled.sum()) for b in frc.branches)} branch points "
+                 f"({time.perf_counter() - t:.1f} s)")
+    if notes:
+        warnings.warn(
+            f"continuation: accuracy below the {digits:g} significant digits asked for "
+            f"(multipliers to {10.0 ** -(digits - 1):.0e}): " + notes + ". Branch points are "
+            "those of the integrator given: finer integration (dt_scale=0.5, "
+            "steps_per_contact=64) improves them; Bifurcation.error and "
+            "Branch.multipliers_error give the estimates.", ContinuationWarning, stacklevel=3)
 
 
 def _settings(integ, segments, n_grid, ds, ds_max, max_angle, tol, bif_tol, orders):

@@ -206,10 +206,10 @@ def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders
                         levels=LEVELS, segments=1, tol=1e-9, target_digits=8.0, max_levels=6):
     """Refine the folds / period doublings of a frequency diagram in place: each listed
     Bifurcation gets ``refined`` (a Refined), its ``frequency`` and ``value`` become the
-    extrapolated value and ``tolerance`` the larger of its bracket and the integrator's error
-    estimate. Bifurcations whose extended system does not converge, and those at a grazing
-    point (``Bifurcation.smooth`` False), keep their diagram values and get ``refined = None``.
-    Returns the list of (bifurcation, Refined or the error)."""
+    extrapolated value and ``error`` its error estimate (Refined.tolerance; ``tolerance`` stays
+    the diagram's bracket). Bifurcations whose extended system does not converge, and those at
+    a grazing point (``Bifurcation.smooth`` False), keep their values and errors and get
+    ``refined = None``. Returns the list of (bifurcation, Refined or the error)."""
     if frc.parameter != "frequency":
         raise ValueError("frc: refine_bifurcations needs a frequency diagram")
     out = []
@@ -234,8 +234,7 @@ def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders
             continue
         bf.refined = r
         bf.frequency = bf.value = r.value
-        bf.tolerance = max(bf.tolerance, r.tolerance)
-        bf.integrator_error = r.tolerance
+        bf.error = r.tolerance
         out.append((bf, r))
     return out
 

@@ -65,6 +65,19 @@ class Integrator:
         Solver.steps_per_excitation_period."""
         return self.solver.steps_per_excitation_period(model, frequency, self.dt_scale)
 
+    def refined(self, k=1):
+        """This integrator with both steps halved k times: dt_scale / 2^k and steps_per_contact
+        (the solver's default if None) * 2^k; for 'adaptive' rtol and atol / 32^k (its error per
+        step falls like h^5), rtol not below 1e-14."""
+        if k == 0:
+            return self
+        if self.method == "adaptive":
+            return dataclasses.replace(self, rtol=max(self.rtol / 32.0 ** k, 1e-14),
+                                       atol=max(self.atol / 32.0 ** k, 1e-300))
+        spc = self.solver.contact_steps()
+        return dataclasses.replace(self, dt_scale=self.dt_scale / 2 ** k,
+                                   steps_per_contact=spc * 2 ** k)
+
     def flow_map(self, model, ex, steps_per_period):
         """An nlbeam FlowMap of model under the harmonic excitation ex with these settings and
         steps_per_period fixed steps per excitation period (0: adaptive), without the warning
@@ -519,7 +532,12 @@ class PeriodicSolution:
     iterations: Newton iterations; boundaries: the excitation phases (periods) of the shooting
     segments; states (m, 2N): the states there; monodromy (2N, 2N) at the first boundary;
     minimal_order: the number of excitation periods after which the orbit repeats (< order
-    when Newton found an orbit of lower order, e.g. a period-1 orbit for order 2)."""
+    when Newton found an orbit of lower order, e.g. a period-1 orbit for order 2).
+    Accuracy (continuation.accuracy): xmax_error (m) and multipliers_error ((2N,), absolute,
+    per multiplier; None without stability) estimate the error of xmax and of the multipliers
+    due to the integration: twice their change when the orbit is solved again with both steps
+    halved (a bound for a method of order >= 1; None when not estimated, error=False);
+    integrator: the Integrator the orbit was computed with."""
 
     state0: np.ndarray
     disc0: np.ndarray | None
@@ -536,6 +554,9 @@ class PeriodicSolution:
     states: np.ndarray
     monodromy: np.ndarray | None
     minimal_order: int = 1
+    xmax_error: float | None = None
+    multipliers_error: np.ndarray | None = None
+    integrator: Integrator | None = None
 
 
 def decay_rate(model):
@@ -573,7 +594,8 @@ def _problem_from_state(model, amplitude, frequency, order, state0, segments, in
 
 
 def periodic_solution(model, amplitude, frequency, order=1, guess=None, *, segments=1,
-                      integrator=None, tol=1e-10, max_iter=15, stability=True, **integrator_kw):
+                      integrator=None, tol=1e-10, max_iter=15, stability=True, error=True,
+                      accuracy=None, **integrator_kw):
     """Periodic solution of order n (period n / frequency) by (multiple) shooting.
 
     amplitude: m (base excitation) or N (force); frequency: Hz. guess: state at t = 0 (2N,) or
@@ -589,9 +611,42 @@ def periodic_solution(model, amplitude, frequency, order=1, guess=None, *, segme
     keywords or as an ``Integrator``. Raises ConvergenceError when Newton does not converge.
     For order > 1 the orbit found may repeat after fewer excitation periods (a period-1 orbit
     solves the period-2 problem too): ``minimal_order`` says, and a ContinuationWarning.
+    error: estimate the integration's error of xmax and of the multipliers (``xmax_error``,
+    ``multipliers_error``: one more solve with both steps halved, about twice the cost).
+    accuracy: None (the integrator as given), or 'default' (6 significant digits), 'high' (8)
+    or a number of digits: the step is halved (up to 4 times) until the estimated error of xmax
+    is at most 10^-digits |xmax| and that of the multipliers 10^-(digits - 1); the solution is
+    returned at the first integrator that meets both (``integrator`` says which), with a
+    ContinuationWarning if none does.
     """
     if integrator is None:
         integrator = Integrator(**integrator_kw)
+    if accuracy is None:
+        return _periodic_solution(model, amplitude, frequency, order, guess, segments,
+                                  integrator, tol, max_iter, stability, error)
+    from .accuracy import multiplier_target, target_digits
+
+    digits = target_digits(accuracy)
+    sol = None
+    for k in range(5):
+        sol = _periodic_solution(model, amplitude, frequency, order,
+                                 guess if sol is None else sol, segments, integrator.refined(k),
+                                 tol, max_iter, stability, True)
+        if sol.xmax_error is not None and sol.xmax_error <= 10.0 ** -digits * abs(sol.xmax) \
+                and (sol.multipliers_error is None
+                     or np.max(sol.multipliers_error / np.maximum(1.0, np.abs(sol.multipliers)))
+                     <= multiplier_target(digits)):
+            return sol
+    warnings.warn(f"periodic_solution: the accuracy asked for ({digits:g} digits) is not met at "
+                  f"{frequency:.9g} Hz with the step halved 4 times (xmax error "
+                  f"{sol.xmax_error}, multipliers error "
+                  f"{None if sol.multipliers_error is None else np.max(sol.multipliers_error)})",
+                  ContinuationWarning, stacklevel=2)
+    return sol
+
+
+def _periodic_solution(model, amplitude, frequency, order, guess, segments, integrator, tol,
+                       max_iter, stability, error):
     if not (math.isfinite(frequency) and frequency > 0):
         raise ValueError(f"frequency: must be finite and > 0 Hz, got {frequency!r}")
     if int(order) != order or order < 1:
@@ -610,7 +665,7 @@ def periodic_solution(model, amplitude, frequency, order=1, guess=None, *, segme
                                variational=stability)
         prob.scale_u = prob.make_scale(U.ravel(), frequency)
         sol = solve_problem(prob, U.ravel(), frequency, tol=tol, max_iter=max_iter,
-                            stability=stability)
+                            stability=stability, error=error)
         return _check_order(sol, frequency)
     d0 = None
     if guess is None:
@@ -625,7 +680,7 @@ def periodic_solution(model, amplitude, frequency, order=1, guess=None, *, segme
     prob, u0 = _problem_from_state(model, amplitude, frequency, order, s0, segments, integrator,
                                    variational=stability, disc0=d0)
     sol = solve_problem(prob, u0, frequency if prob.parameter == "frequency" else prob.value(),
-                        tol=tol, max_iter=max_iter, stability=stability)
+                        tol=tol, max_iter=max_iter, stability=stability, error=error)
     return _check_order(sol, frequency)
 
 
@@ -636,12 +691,14 @@ def _check_order(sol, frequency):
             f"found repeats after {sol.minimal_order} excitation period(s) (its minimal_order): "
             f"it is an order-{sol.minimal_order} orbit. For a true order-{sol.order} orbit give "
             "a guess on one (a branch point of that order, or a state from brute-force "
-            "integration where it is the attractor)", ContinuationWarning, stacklevel=2)
+            "integration where it is the attractor)", ContinuationWarning, stacklevel=3)
     return sol
 
 
-def solve_problem(prob, u0, p, *, tol=1e-10, max_iter=15, stability=True, _rephased=0):
-    """Newton on a ShootingProblem at fixed p; moves boundaries out of contact if needed."""
+def solve_problem(prob, u0, p, *, tol=1e-10, max_iter=15, stability=True, error=False,
+                  _rephased=0):
+    """Newton on a ShootingProblem at fixed p; moves boundaries out of contact if needed.
+    error: attach the error estimate (see make_solution)."""
     u, ev, res, it = prob.solve(u0, p, tol=tol, max_iter=max_iter)
     if prob.needs_rephase(u, p) or np.any(prob.boundary_clearance(u, p) <= 0):
         if _rephased >= 2:
@@ -649,18 +706,34 @@ def solve_problem(prob, u0, p, *, tol=1e-10, max_iter=15, stability=True, _repha
                                    "contact; try more segments or a better guess")
         prob2, u2 = prob.rephased(u, p)
         return solve_problem(prob2, u2, p, tol=tol, max_iter=max_iter, stability=stability,
-                             _rephased=_rephased + 1)
-    return make_solution(prob, u, p, ev, res, it, stability)
+                             error=error, _rephased=_rephased + 1)
+    return make_solution(prob, u, p, ev, res, it, stability, error)
 
 
-def make_solution(prob, u, p, ev, res, it, stability=True):
+def make_solution(prob, u, p, ev, res, it, stability=True, error=False):
+    """The PeriodicSolution of the converged orbit u of prob at p (ev: its evaluation); with
+    ``error`` its error estimate (continuation.accuracy.orbit_error: one more solve with both
+    steps halved; a refined solve that fails warns and leaves the estimate None)."""
     model, A, f = prob.setup(p)
     s0, d0 = prob.state_at_zero(u, p)
     mu = prob.multipliers(ev.Ms) if (stability and ev.Ms) else None
+    xerr = mu_err = None
+    if error:
+        from .accuracy import orbit_error  # the estimator builds on this module
+
+        try:
+            oe = orbit_error(prob, u, p, ev.xmax, mu)
+            xerr, mu_err = oe.xmax, oe.multipliers
+        except ConvergenceError as exc:
+            warnings.warn(f"periodic_solution: no error estimate at {f:.9g} Hz: the orbit "
+                          f"did not converge with both steps halved ({exc}); the solution "
+                          "may lie next to a fold or be resolved too coarsely: try dt_scale=0.5",
+                          ContinuationWarning, stacklevel=3)
     return PeriodicSolution(
         state0=s0, disc0=d0, order=prob.order, frequency=f, amplitude=A, period=prob.order / f,
         xmax=ev.xmax, multipliers=mu, stable=None if mu is None else bool(np.abs(mu[0]) < 1.0),
         residual=float(res), iterations=int(it), boundaries=prob.boundaries.copy(),
         states=np.asarray(u).reshape(prob.n_seg, prob.N2).copy(),
         monodromy=prob.monodromy(ev.Ms) if ev.Ms else None,
-        minimal_order=prob.minimal_order(u, p) if prob.order > 1 else 1)
+        minimal_order=prob.minimal_order(u, p) if prob.order > 1 else 1,
+        xmax_error=xerr, multipliers_error=mu_err, integrator=prob.integrator)

@@ -69,6 +69,14 @@ def _demo(args):
     return 0
 
 
+def _accuracy(text):
+    """--accuracy: a name ('default', 'high', 'off') or a number of digits."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
 def _frc(args):
     import continuation
 
@@ -78,13 +86,14 @@ def _frc(args):
         f"orders {args.orders}, {args.n_grid} grid frequencies (this can take minutes)")
     frc = continuation.frequency_response(model, args.amplitude, tuple(args.f_range),
                                           orders=tuple(args.orders), n_grid=args.n_grid,
+                                          accuracy=_accuracy(args.accuracy),
                                           progress=lambda msg: log(f"nlbeam frc:   {msg}"))
     frc.save(args.out)
     log(f"nlbeam frc: {len(frc.branches)} branches, {frc.n_points} points, "
         f"{len(frc.bifurcations)} bifurcations in {frc.wall_time:.1f} s -> {args.out}")
     if not args.quiet:
         for b in frc.bifurcations:
-            print(f"{b.kind:16s} order {b.order}  f = {b.frequency:.4f} Hz  "
+            print(f"{b.kind:16s} order {b.order}  f = {b.frequency:.9g} +- {b.error:.1e} Hz  "
                   f"|x|max = {b.xmax * 1e3:.4f} mm" + (f"  ({b.note})" if b.note else ""))
     if args.plot:
         from .plots.files import files_backend, save_figure
@@ -322,6 +331,9 @@ def _parser():
                    help=f"orders n (period n/f), default {_shown(per['orders'])}")
     p.add_argument("--n-grid", type=int, default=per["n_grid"],
                    help=f"brute-force start frequencies, default {per['n_grid']}")
+    p.add_argument("--accuracy", default="default",
+                   help="significant digits of the fold / period-doubling frequencies: 'default' "
+                   "(6), 'high' (8), a number, or 'off' (no error estimates)")
     model_opts(p)
     p.add_argument("--out", default="frc.h5", help="HDF5 result file, default frc.h5")
     p.add_argument("--plot", default=None, help="also write the diagram (PNG/PDF/SVG)")

@@ -3,8 +3,10 @@
 Attributes: version, amplitude, parameter, p_range, wall_time, n_points, ``model.<name>``,
 ``settings.<name>``. Groups: ``branches/NNNN`` (attributes order, parameter, origin, ends;
 datasets values, frequency, amplitude, xmax, stable, multipliers, state0, states, boundaries,
-the last ones only where computed), ``bifurcations`` (one dataset per field, NaN rows where
-a multiplier, state or contact memory is absent), ``superharmonics``.
+xmax_error, multipliers_error, error_sampled, the last ones only where computed),
+``bifurcations`` (one dataset per field, NaN rows where a multiplier, state or contact memory
+is absent; ``error``, the integration's error estimate, was ``integrator_error`` in older
+files), ``superharmonics``.
 """
 from __future__ import annotations
 
@@ -45,7 +47,8 @@ def save_frequency_response(frc, path):
                 gb.attrs["origin"] = b.origin
                 gb.attrs["ends"] = np.array([str(e) for e in b.ends], dtype="S64")
                 for name in ("values", "frequency", "amplitude", "xmax", "stable",
-                             "multipliers", "state0", "states", "boundaries"):
+                             "multipliers", "state0", "states", "boundaries", "xmax_error",
+                             "multipliers_error", "error_sampled"):
                     if getattr(b, name) is not None:  # stable, multipliers: None without
                         gb.create_dataset(name, data=np.asarray(getattr(b, name)))
             gf = h.create_group("bifurcations")
@@ -54,7 +57,7 @@ def save_frequency_response(frc, path):
             gf.create_dataset("note", data=np.array([b.note.encode() for b in bif],
                                                     dtype=h5py.string_dtype()))
             for name in ("frequency", "value", "xmax", "order", "branch", "tolerance",
-                         "integrator_error"):
+                         "error"):
                 gf.create_dataset(name, data=np.array([getattr(b, name) for b in bif],
                                                       dtype=float))
             n2 = max([len(b.multipliers) for b in bif if b.multipliers is not None],
@@ -106,7 +109,8 @@ def load_frequency_response(path):
                 else ("", ""),
                 **{n: gb[n][()] if n in gb else None
                    for n in ("values", "frequency", "amplitude", "xmax", "stable",
-                             "multipliers", "state0", "states", "boundaries")}))
+                             "multipliers", "state0", "states", "boundaries", "xmax_error",
+                             "multipliers_error", "error_sampled")}))
         gf = h["bifurcations"]
         for i in range(len(gf["kind"])):
             frc.bifurcations.append(Bifurcation(
@@ -116,8 +120,8 @@ def load_frequency_response(path):
                 tolerance=float(gf["tolerance"][i]),
                 multipliers=None if np.all(np.isnan(gf["multipliers"][i]))
                 and gf["multipliers"].shape[1] else gf["multipliers"][i],
-                integrator_error=float(gf["integrator_error"][i]) if "integrator_error" in gf
-                else float("nan"),
+                error=float(gf["error"][i]) if "error" in gf else float(
+                    gf["integrator_error"][i]) if "integrator_error" in gf else float("nan"),
                 note=s(gf["note"][i]) if "note" in gf else "",
                 state0=gf["state0"][i],
                 disc0=gf["disc0"][i].reshape(-1, 2) if "disc0" in gf and gf["disc0"].shape[1]

@@ -1,0 +1,568 @@
+"""Error estimates from the integration itself: a periodic orbit or a bifurcation solved again
+with the step refined, and the difference taken as the measure of the error.
+
+A *level* k is the integrator with the free-flight step and the contact step both divided by
+2^k (``Integrator.refined``; for the adaptive method rtol and atol divided by 32^k).
+
+Orbits (``orbit_error``; every PeriodicSolution, and every 10th point of a diagram's branches
+in ``branch_errors``): the orbit is solved again at level 1 at the same parameter; the error of
+its xmax and multipliers is stated as ``SAFETY`` = 2 times the change. For a method converging
+at order q >= 1 the error of the level-0 value is |change| / (1 - 2^-q) <= 2 |change|; measured
+against converged values (tests/continuation/test_accuracy.py) the true error is 0.5-0.7 of
+the stated one on the paper model, Duffing, a 2-DOF system and a piecewise-linear stop. This
+covers whatever the error's cause: the discretization of the flow, and the variational
+monodromy's difference from the derivative of the fixed-step map.
+
+Bifurcations (``bifurcation_levels``) are located again at levels 1, 2, ...: period doublings
+and Neimark-Sacker points by the secant method in the parameter on the critical multiplier (a
+regular root), folds as the turning point of the branch (the extremum of the parameter along
+it, by successive parabolic interpolation on hyperplanes normal to the tangent: it needs no
+monodromy, so it is the fold of the discrete map even where the variational monodromy is off;
+located at level 0 too), grazing points by bisection on the number of impacts per period
+(level 0 too, where the diagram's bracket is wide). ``combine`` turns the values per level
+into the reported value and its stated error: the finest value, error half the last change
+with one finer level (order >= 1.6 assumed), 1.25 |d| / (r - 1) with the observed ratio r of
+successive changes (Roache's grid convergence index) when it shows clean convergence (3-40);
+with two clean ratios (four levels) the Richardson extrapolant, error the change of the
+extrapolant; never below 2e-9 relative (the solves' own resolution). Levels are added until
+the stated error meets the target (``accuracy``: 6 significant digits by default, 8 with
+'high'). ``estimate_diagram`` does all of this for a FrequencyResponse.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._newton import ConvergenceError
+from .shooting import ShootingProblem, _problem_from_state
+
+SAFETY = 2.0  # error of a level-0 value = SAFETY * |level 0 - level 1| (a bound for order >= 1)
+ACCURACY = {"default": 6.0, "high": 8.0}
+KINDS_LOCATED = ("fold", "period-doubling", "neimark-sacker", "grazing")
+
+
+def target_digits(accuracy):
+    """Significant digits asked for: None or 'default' 6, 'high' 8, or a number in [3, 12]."""
+    if accuracy is None:
+        return ACCURACY["default"]
+    if isinstance(accuracy, str):
+        if accuracy not in ACCURACY:
+            raise ValueError(f"accuracy: must be 'default', 'high' or a number of significant "
+                             f"digits in [3, 12], got {accuracy!r}")
+        return ACCURACY[accuracy]
+    d = float(accuracy)
+    if not (3.0 <= d <= 12.0):
+        raise ValueError(f"accuracy: a number of significant digits must lie in [3, 12], "
+                         f"got {accuracy!r}")
+    return d
+
+
+def multiplier_target(digits):
+    """Absolute accuracy of the multipliers that goes with ``digits``: 10^-(digits - 1)
+    (1e-5 at the default 6 digits)."""
+    return 10.0 ** -(digits - 1.0)
+
+
+def refined(integrator, k=1):
+    """The Integrator of level k (``Integrator.refined``)."""
+    return integrator.refined(k)
+
+
+def at_level(prob, k=1):
+    """A copy of the ShootingProblem prob (same boundaries, scales and parameter) integrated at
+    level k relative to its own integrator: the steps per period times 2^k."""
+    integ = refined(prob.integrator, k)
+    spp = prob.steps_per_period * 2 ** k if prob.steps_per_period else None
+    new = ShootingProblem(prob.base_model, prob.amplitude, prob.frequency, prob.order,
+                          prob.boundaries, integ, parameter=prob.parameter,
+                          steps_per_period=spp, scale_u=prob.scale_u, scale_p=prob.scale_p,
+                          variational=prob.variational)
+    new.sel_clearance = prob.sel_clearance
+    return new
+
+
+def match_multipliers(ref, other):
+    """``other`` reordered so that other[i] is the multiplier nearest ref[i] (a one-to-one
+    assignment minimising the total distance)."""
+    from scipy.optimize import linear_sum_assignment
+
+    ref, other = np.asarray(ref), np.asarray(other)
+    _, col = linear_sum_assignment(np.abs(ref[:, None] - other[None, :]))
+    return other[col]
+
+
+@dataclass
+class OrbitError:
+    """Error estimate of one periodic orbit: xmax (m) and multipliers ((2N,) absolute, None
+    without stability) at the orbit's integrator, SAFETY times the change at level 1;
+    xmax_refined and multipliers_refined: the values at level 1 (multipliers in the order of the
+    orbit's)."""
+
+    xmax: float
+    multipliers: np.ndarray | None
+    xmax_refined: float
+    multipliers_refined: np.ndarray | None
+
+
+def orbit_error(prob, u, p, xmax, multipliers=None, *, tol=1e-10, max_iter=10):
+    """Error estimate of the orbit u of problem prob at parameter p (its xmax and multipliers
+    as computed at prob's integrator): the orbit solved again at level 1 at the same parameter
+    (Newton from u), SAFETY times the differences. Raises ConvergenceError when the refined
+    solve fails (e.g. next to a fold, where the refined branch may not reach p)."""
+    fine = at_level(prob, 1)
+    u1, ev, _, _ = fine.solve(np.asarray(u, dtype=float), p, tol=tol, max_iter=max_iter)
+    mu1 = None
+    mu_err = None
+    if multipliers is not None and ev.Ms:
+        mu1 = match_multipliers(multipliers, fine.multipliers(ev.Ms))
+        mu_err = SAFETY * np.abs(np.asarray(multipliers) - mu1)
+    return OrbitError(SAFETY * abs(xmax - ev.xmax), mu_err, float(ev.xmax), mu1)
+
+
+# --- bifurcations at refined levels -------------------------------------------------------------
+def _problem_at(model, amplitude, bif, parameter, integrator, segments):
+    """A shooting problem at ``integrator`` through the orbit of the bifurcation (from its
+    state and contact state at t = 0), continued in ``parameter``; (problem, u, p)."""
+    freq = bif.frequency
+    amp = amplitude
+    m = model
+    if parameter == "amplitude":
+        amp = bif.value
+    elif parameter != "frequency":
+        m = dataclasses.replace(model, **{parameter: float(bif.value)})
+    prob, u = _problem_from_state(m, amp, freq, bif.order, bif.state0, segments, integrator,
+                                  disc0=bif.disc0)
+    if parameter != "frequency":
+        prob.parameter = parameter
+        prob.scale_p = max(abs(prob.value()), 1e-300)
+    return prob, u, float(bif.value)
+
+
+def _critical(kind, mu):
+    """The test quantity of a period doubling (Re mu + 1 of the multiplier nearest -1) or a
+    Neimark-Sacker point (|mu| - 1 of the complex multiplier nearest the unit circle)."""
+    mu = np.asarray(mu)
+    if kind == "period-doubling":
+        return float(mu[np.argmin(np.abs(mu + 1.0))].real + 1.0)
+    cplx = mu[np.abs(mu.imag) > 1e-12 * np.abs(mu)]
+    if not cplx.size:
+        raise ConvergenceError("neimark-sacker: no complex multiplier pair at this level")
+    return float(np.abs(cplx[np.argmin(np.abs(np.abs(cplx) - 1.0))]) - 1.0)
+
+
+def _secant_regular(prob, u0, p0, kind, hint, tol=1e-10, max_iter=12):
+    """Period doubling / Neimark-Sacker of prob near p0 by the secant method in p on the
+    critical multiplier (orbits solved at fixed p by Newton), the first step with the slope
+    found at the previous level (``hint['slope']``, updated). Returns (p, u)."""
+    def g_at(u, p):
+        u, ev, _, _ = prob.solve(u, p, tol=tol, max_iter=10)
+        if not ev.Ms:
+            raise ConvergenceError(f"{kind}: no multipliers (stability=False)")
+        return _critical(kind, prob.multipliers(ev.Ms)), u
+
+    ga, ua = g_at(u0, p0)
+    pa = p0
+    steps = [1e-7, -1e-7, 1e-9, -1e-9]  # relative; a period doubling may lie next to a fold
+    if hint.get("slope") and abs(ga / hint["slope"]) < 1e-3 * abs(p0):
+        steps.insert(0, -ga / hint["slope"] / p0)
+    for h in steps:
+        pb = p0 * (1.0 + h) if p0 != 0 else h
+        try:
+            gb, ub = g_at(ua, pb)
+            break
+        except ConvergenceError:
+            continue
+    else:
+        raise ConvergenceError(f"{kind}: no orbit next to {p0:.9g} at this level")
+    for _ in range(max_iter):
+        if abs(pb - pa) <= 1e-12 * abs(pb) or gb == 0.0:
+            break
+        if gb == ga:
+            raise ConvergenceError(f"{kind}: the critical multiplier does not change with the "
+                                   f"parameter near {p0:.9g}")
+        pc = pb - gb * (pb - pa) / (gb - ga)
+        if not math.isfinite(pc) or abs(pc - p0) > 0.02 * abs(p0):
+            raise ConvergenceError(f"{kind}: the secant left the neighbourhood of {p0:.9g}")
+        uc = ub + (ub - ua) * (pc - pb) / (pb - pa)
+        gc, uc = g_at(uc, pc)
+        pa, ga, ua, pb, gb, ub = pb, gb, ub, pc, gc, uc
+    if gb != ga and pb != pa:
+        hint["slope"] = (gb - ga) / (pb - pa)
+    return pb, ub
+
+
+def _on_normal(prob, z_c, t, z_start, jp, tol=1e-10, max_iter=12):
+    """The point of prob's branch on the hyperplane through z_c normal to t (scaled
+    variables z = (u / scale_u, p / scale_p)), by Newton on the bordered system from z_start
+    (dR/du from the variational equations at each iterate, the scaled dR/dp ``jp`` kept, or
+    with jp None taken afresh by a forward difference). Returns z."""
+    w, wp = prob.scale_u, prob.scale_p
+    z = z_start.copy()
+    res = np.inf
+    for _ in range(max_iter):
+        ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=True, jac_p=jp is None)
+        r = ev.R / w
+        col = ev.Jp * wp / w if jp is None else jp
+        A = np.vstack([np.hstack([ev.Ju * w[None, :] / w[:, None], col[:, None]]), t[None, :]])
+        try:
+            dz = np.linalg.solve(A, -np.r_[r, t @ (z - z_c)])
+        except np.linalg.LinAlgError:
+            raise ConvergenceError("fold: singular bordered Jacobian") from None
+        res = float(np.max(np.abs(r)))
+        if res <= tol and np.max(np.abs(dz)) <= 1e-7:
+            return z
+        z = z + dz
+    raise ConvergenceError(f"fold: the corrector did not converge near {z_c[-1] * wp:.9g} "
+                           f"(residual {res:.1e})")
+
+
+def _fold_turning_point(prob, u0, p0, deltas=(1e-4, 1e-5), tol=1e-10):
+    """Fold of prob near (u0, p0): the extremum of p along prob's branch (its turning point,
+    which needs no monodromy), by successive parabolic interpolation of p(s) over points of the
+    branch on hyperplanes normal to the tangent t at (u0, p0), at positions s along t (scaled
+    arclength): three points at s = -delta, 0, delta, then each new point at the vertex of the
+    parabola through the last three, until the vertex moves less than 3e-6; started again with
+    the next of ``deltas`` when a corrector fails (a sharply curved branch), and at last with
+    dR/dp renewed at every corrector iterate. Returns (p, u)."""
+    w, wp = prob.scale_u, prob.scale_p
+    z0 = np.r_[np.asarray(u0) / w, p0 / wp]
+    ev = prob.evaluate(u0, p0, jac=True, jac_p=True)
+    jp = ev.Jp * wp / w
+    J = np.hstack([ev.Ju * w[None, :] / w[:, None], jp[:, None]])
+    t = np.linalg.svd(J)[2][-1]  # the tangent (null vector of [dR/du | dR/dp], scaled)
+    err = None
+    for delta, jp_ in [(d, jp) for d in deltas] + [(deltas[-1], None)]:
+        try:
+            z = _vertex_along(prob, z0, t, jp_, delta, tol)
+            return float(z[-1] * wp), z[:-1] * w
+        except ConvergenceError as exc:
+            err = exc
+    raise err
+
+
+def _vertex_along(prob, z0, t, jp, delta, tol, s_tol=3e-6, max_iter=12):
+    """The branch point (scaled z) at the turning point, see _fold_turning_point."""
+    S, P, Z = [], [], []
+    z_prev = z0
+    for s in (-delta, 0.0, delta):
+        z = _on_normal(prob, z0 + s * t, t, z_prev, jp, tol)
+        S.append(s)
+        P.append(z[-1])
+        Z.append(z)
+        z_prev = z
+    for _ in range(max_iter):
+        s1, s2, s3 = S[-3:]
+        p1, p2, p3 = P[-3:]
+        # vertex of the parabola through the last three points (divided differences)
+        d1 = (p2 - p1) / (s2 - s1)
+        d2 = ((p3 - p2) / (s3 - s2) - d1) / (s3 - s1)
+        if d2 == 0.0:
+            break
+        sv = 0.5 * (s1 + s2) - d1 / (2 * d2)
+        near = S[int(np.argmin(np.abs(np.array(S) - sv)))]
+        sv = float(np.clip(sv, near - 0.02, near + 0.02))
+        z_start = Z[int(np.argmin(np.abs(np.array(S) - sv)))]
+        z = _on_normal(prob, z0 + sv * t, t, z_start + (sv - near) * t, jp, tol)
+        moved = abs(sv - S[-1])
+        # keep the three points nearest the vertex, the newest last
+        keep = np.argsort(np.abs(np.array(S) - sv))[:2]
+        S = [S[i] for i in sorted(keep)] + [sv]
+        P = [P[i] for i in sorted(keep)] + [z[-1]]
+        Z = [Z[i] for i in sorted(keep)] + [z]
+        if moved <= s_tol or min(abs(S[0] - sv), abs(S[1] - sv)) <= s_tol:
+            return z
+    raise ConvergenceError(f"fold: no turning point of the branch found near "
+                           f"{z0[-1] * prob.scale_p:.9g}")
+
+
+def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60):
+    """Grazing point of prob near p0: where the number of impacts per period changes, by
+    bisection in p between orbits solved at fixed p (the bracket is first widened from
+    ``width`` until its ends differ) down to a width of ``resolution`` |p0|. Returns (the
+    middle of the bracket, u at its end on p0's side, half the bracket's width)."""
+    def solve(u, p):
+        u, ev, _, _ = prob.solve(u, p, tol=tol, max_iter=12)
+        return u, ev.n_impacts
+
+    u_mid, n_mid = solve(u0, p0)
+    d = max(width, 1e-9 * abs(p0))
+    lo = hi = None
+    for _ in range(12):
+        for s in (-1.0, 1.0):
+            try:
+                u_s, n_s = solve(u_mid, p0 + s * d)
+            except ConvergenceError:
+                continue
+            if n_s != n_mid:
+                a, b = sorted([(p0, u_mid, n_mid), (p0 + s * d, u_s, n_s)], key=lambda x: x[0])
+                lo, hi = a, b
+                break
+        if lo is not None:
+            break
+        d *= 2.0
+        if d > 0.01 * abs(p0):
+            break
+    if lo is None:
+        raise ConvergenceError(f"grazing: no change of the number of impacts near {p0:.9g}")
+    for _ in range(max_iter):
+        if hi[0] - lo[0] <= resolution * abs(p0):
+            break
+        pm = 0.5 * (lo[0] + hi[0])
+        try:
+            um, nm = solve(0.5 * (lo[1] + hi[1]), pm)
+        except ConvergenceError:
+            um, nm = None, None
+        if nm == lo[2]:
+            lo = (pm, um, nm)
+        elif nm == hi[2]:
+            hi = (pm, um, nm)
+        else:  # a third impact count or no solution: stop at the bracket so far
+            break
+    near = lo if lo[2] == n_mid else hi
+    return 0.5 * (lo[0] + hi[0]), near[1], 0.5 * (hi[0] - lo[0])
+
+
+def _locate(kind, prob, u, p, width, resolution, hint):
+    """(p, u, half-width of the final bracket) of the bifurcation of this kind near p (hint:
+    a dict carried from level to level)."""
+    if kind == "grazing":
+        return _grazing_bisect(prob, u, p, width, resolution)
+    if kind == "fold":
+        return (*_fold_turning_point(prob, u, p), 0.0)
+    return (*_secant_regular(prob, u, p, kind, hint), 0.0)
+
+
+def combine(values, floor=2e-9):
+    """(value, error) from the values of one quantity at levels 0, 1, ..., K (each step half
+    the previous), d_k = v_k - v_(k-1), r_k = d_(k-1) / d_k; a ratio is clean when 3 <= r <= 40
+    (convergence of order 1.6-5.3). K >= 3 with the last two ratios clean: the Richardson
+    extrapolant E_K = v_K + d_K / (r_K - 1), error |E_K - E_(K-1)|. Else the finest value
+    v_K: with the last ratio clean, error 1.25 |d_K| / (r_K - 1) (Roache's grid convergence
+    index); K = 1, error |d_1| / 2 (order >= 1.6 assumed); otherwise |d_K|. Never below
+    ``floor`` |value| (the solves' own resolution)."""
+    v = np.asarray(values, dtype=float)
+    if len(v) < 2:
+        return float(v[-1]), float("nan")
+    d = np.diff(v)
+    r = [d[i - 1] / d[i] if d[i] != 0.0 else np.inf for i in range(1, len(d))]
+    clean = [3.0 <= x <= 40.0 for x in r]
+    if len(r) >= 2 and clean[-1] and clean[-2]:
+        e_k = v[-1] + d[-1] / (r[-1] - 1.0)
+        e_prev = v[-2] + d[-2] / (r[-2] - 1.0)
+        value, error = float(e_k), abs(e_k - e_prev)
+    elif r and clean[-1]:
+        value, error = float(v[-1]), 1.25 * abs(d[-1]) / (r[-1] - 1.0)
+    elif len(d) >= 2 and d[-1] == 0.0:  # no change at the last level
+        value, error = float(v[-1]), abs(d[-2]) / 8.0
+    else:
+        value, error = float(v[-1]), abs(d[-1]) * (0.5 if len(d) == 1 else 1.0)
+    return value, float(max(error, floor * abs(value)))
+
+
+@dataclass
+class BifurcationLevels:
+    """One bifurcation located at levels 0 (the diagram's value), 1, ..., K: values (K + 1,)
+    of the continued parameter; value, error: the reported value and its error estimate (see
+    ``combine``); failed: the message of a level that did not converge ('' if none)."""
+
+    kind: str
+    values: np.ndarray
+    value: float
+    error: float
+    failed: str = ""
+
+
+# the kinds whose diagram value is not the level-0 value of the method used at the finer levels
+# (folds: the diagram's test function uses the variational monodromy, the turning point not;
+# grazing points: the diagram's bracket may be wide), located again at level 0
+_RELOCATE_LEVEL0 = ("fold", "grazing")
+
+
+def bifurcation_levels(model, amplitude, bif, integrator, *, parameter="frequency", digits=6.0,
+                       max_levels=4, segments=1):
+    """Locate the bifurcation ``bif`` (a continuation.Bifurcation of a diagram computed with
+    ``integrator``) at levels 1, 2, ... until the stated error is at most 10^-digits |value|
+    (at least one level, at most ``max_levels``); folds, and grazing points whose bracket is
+    wider than half the target, at level 0 too (their diagram values come from another
+    criterion or a wider bracket); one reported at a grazing point (``smooth`` False) as a
+    grazing point. Returns a
+    BifurcationLevels; a level that does not converge ends the sequence (``failed`` says why;
+    with fewer than two levels the error is NaN)."""
+    if bif.kind not in KINDS_LOCATED:
+        raise ValueError(f"bif.kind: must be one of {KINDS_LOCATED}, got {bif.kind!r}")
+    p = float(bif.value)
+    # a bifurcation reported at a grazing point (a multiplier jumps there) is located as one
+    kind = bif.kind if getattr(bif, "smooth", True) else "grazing"
+    relocate = kind in _RELOCATE_LEVEL0
+    if kind == "grazing" and math.isfinite(bif.tolerance) \
+            and bif.tolerance <= 0.5 * 10.0 ** -digits * abs(p):
+        relocate = False  # the diagram's bracket is narrow enough
+    values = [] if relocate else [p]
+    value, error = p, float("nan")
+    failed = ""
+    prob = u = None
+    hint = {}
+    width = max(float(bif.tolerance) if math.isfinite(bif.tolerance) else 0.0,
+                0.5 * 10.0 ** -digits * abs(p))
+    for k in range(0 if relocate else 1, max_levels + 1):
+        try:
+            if prob is None:
+                prob, u, p = _problem_at(model, amplitude, bif, parameter, refined(integrator, k),
+                                         segments)
+            else:
+                prob = at_level(prob, 1)
+            p, u, half = _locate(kind, prob, u, p, width, 0.5 * 10.0 ** -digits, hint)
+        except (ConvergenceError, ValueError) as exc:
+            failed = f"level {k}: {exc}"
+            break
+        values.append(float(p))
+        if len(values) < 2:
+            continue
+        value, error = combine(values)
+        error = max(error, half)
+        if error <= 10.0 ** -digits * abs(value):
+            break
+        width = max(abs(values[-1] - values[-2]), 0.5 * 10.0 ** -digits * abs(p))
+    if len(values) < 2:
+        value, error = (values[0] if values else float(bif.value)), float("nan")
+    error = max(error, 1e-15 * abs(value)) if math.isfinite(error) else error
+    return BifurcationLevels(bif.kind, np.array(values), float(value), float(error), failed)
+
+
+# --- whole diagrams ------------------------------------------------------------------------------
+def _branch_problem(model, branch, i, integrator):
+    """(problem at integrator, u, p) of point i of a Branch, rebuilt from its stored states."""
+    m0 = model
+    f = float(branch.frequency[i])
+    A = float(branch.amplitude[i])
+    p = float(branch.values[i])
+    if branch.parameter not in ("frequency", "amplitude"):
+        m0 = dataclasses.replace(model, **{branch.parameter: p})
+    prob = ShootingProblem(model, A, f, branch.order, branch.boundaries[i], integrator,
+                           parameter=branch.parameter,
+                           steps_per_period=integrator.steps_per_period(m0, f),
+                           variational=branch.multipliers is not None)
+    u = np.asarray(branch.states[i], dtype=float).ravel()
+    prob.scale_u = prob.make_scale(u, p)
+    return prob, u, p
+
+
+def sample_indices(n, every):
+    """Every ``every``-th of n branch points, the first and the last always."""
+    return np.unique(np.r_[np.arange(0, n, max(1, int(every))), n - 1]) if n else np.array([], int)
+
+
+def branch_errors(model, branch, integrator, *, every=10):
+    """Error estimates of a Branch's xmax (m) and multipliers at every ``every``-th point and
+    the two ends (``orbit_error`` after the point is solved again at the branch's integrator);
+    the multipliers' as the largest over the point's multipliers of error / max(1, |mu|)
+    (absolute inside the unit circle, relative outside). Between sampled points each point
+    gets the larger estimate of its two nearest sampled neighbours along the branch. Returns
+    (xmax_error (n,), multipliers_error (n,) or None without stability, sampled (n,) bool:
+    where the estimate was computed, not interpolated). A sample whose refined solve fails
+    (next to a fold) is left out."""
+    n = len(branch.values)
+    xe = np.full(n, np.nan)
+    me = np.full(n, np.nan)
+    sampled = np.zeros(n, dtype=bool)
+    for i in sample_indices(n, every):
+        try:
+            prob, u, p = _branch_problem(model, branch, i, integrator)
+            ev = prob.evaluate(u, p, jac=True, jac_p=False)
+            if np.max(np.abs(ev.R / prob.scale_u)) > 1e-9:  # not the stored discretization
+                u, ev, _, _ = prob.solve(u, p, max_iter=6)
+            mu = prob.multipliers(ev.Ms) if ev.Ms else None
+            oe = orbit_error(prob, u, p, ev.xmax, mu, max_iter=8)
+        except (ConvergenceError, ValueError):
+            continue
+        xe[i] = oe.xmax
+        if oe.multipliers is not None:
+            me[i] = float(np.max(oe.multipliers / np.maximum(1.0, np.abs(mu))))
+        sampled[i] = True
+    idx = np.nonzero(sampled)[0]
+    if idx.size:
+        left = np.searchsorted(idx, np.arange(n), side="right") - 1
+        right = np.minimum(left + 1, idx.size - 1)
+        left = np.maximum(left, 0)
+        for arr in (xe, me):
+            arr[~sampled] = np.fmax(arr[idx[left]], arr[idx[right]])[~sampled]
+    return xe, (me if branch.multipliers is not None else None), sampled
+
+
+def _short(values, n=8):
+    s = ", ".join(f"{v:.7g}" for v in values[:n])
+    return s + (f" and {len(values) - n} more" if len(values) > n else "")
+
+
+def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segments=1,
+                     max_levels=4, grazing_levels=1):
+    """Attach error estimates to a diagram computed with ``integrator``, in place: each Branch
+    gets xmax_error, multipliers_error and error_sampled (``branch_errors``); each fold, period
+    doubling and Neimark-Sacker point is located again at levels 1, 2, ... (at most
+    ``max_levels``) until its stated error meets the target digits of ``accuracy``, grazing
+    points (and bifurcations reported at one) at levels 0 and 1 only (``grazing_levels``): its
+    ``value`` (and ``frequency`` for a frequency diagram) becomes the reported value of
+    ``bifurcation_levels``, ``error`` its
+    error estimate, ``levels`` the values per level; ``tolerance`` stays the width of the
+    diagram's bracket. Returns a message for one warning ('' if all is met): sampled branch
+    points whose multiplier error exceeds 10^-(digits - 1), bifurcations that could not be
+    located at a finer step, folds / period doublings / Neimark-Sacker points whose error
+    exceeds the target."""
+    digits = target_digits(accuracy)
+    mt = multiplier_target(digits)
+    n_bad = n_tot = 0
+    worst = None
+    for bi, b in enumerate(frc.branches):
+        xe, me, sm = branch_errors(model, b, integrator, every=every)
+        b.xmax_error, b.multipliers_error, b.error_sampled = xe, me, sm
+        if me is None or not sm.any():
+            continue
+        n_tot += int(sm.sum())
+        n_bad += int(np.sum(me[sm] > mt))
+        k = int(np.nanargmax(np.where(sm, me, np.nan)))
+        if worst is None or me[k] > worst[0]:
+            worst = (float(me[k]), float(b.values[k]), bi, b.order)
+    failed, above = [], []
+    for bf in frc.bifurcations:
+        if bf.kind not in KINDS_LOCATED:
+            continue
+        at_grazing = bf.kind == "grazing" or not getattr(bf, "smooth", True)
+        lv = bifurcation_levels(model, frc.amplitude, bf, integrator, parameter=frc.parameter,
+                                digits=digits, segments=segments,
+                                max_levels=grazing_levels if at_grazing else max_levels)
+        bf.levels = lv.values
+        bf.error = lv.error
+        if not math.isfinite(lv.error):
+            failed.append(bf)
+            continue
+        bf.value = lv.value
+        if frc.parameter == "frequency":
+            bf.frequency = lv.value
+        if not at_grazing and lv.error > 10.0 ** -digits * abs(lv.value):
+            above.append(bf)
+    parts = []
+    if n_bad:
+        parts.append(f"multiplier errors above {mt:.0e} at {n_bad} of {n_tot} sampled branch "
+                     f"points (largest {worst[0]:.1e} at {worst[1]:.7g} on branch "
+                     f"{worst[2] + 1}, order {worst[3]})")
+    for kinds, what in ((("fold", "period-doubling", "neimark-sacker"), "fold/PD/NS"),
+                        (("grazing",), "grazing")):
+        f_ = [b.value for b in failed
+              if (b.kind if getattr(b, "smooth", True) else "grazing") in kinds]
+        if f_:
+            parts.append(f"{len(f_)} {what} point(s) could not be located again with a finer "
+                         f"step (error NaN): at {_short(f_)}")
+    if above:
+        parts.append(f"{len(above)} fold/PD/NS point(s) with errors above the target after "
+                     f"{max_levels} step halvings: at "
+                     + ", ".join(f"{b.value:.9g} +- {b.error:.1e}" for b in above[:8])
+                     + (f" and {len(above) - 8} more" if len(above) > 8 else ""))
+    return "; ".join(parts)
+
+
+__all__ = ["orbit_error", "bifurcation_levels", "branch_errors", "estimate_diagram", "refined",
+           "at_level", "combine", "target_digits", "multiplier_target", "OrbitError",
+           "BifurcationLevels", "SAFETY", "ACCURACY"]

@@ -1,0 +1,236 @@
+"""Error estimates (continuation.accuracy) against converged values computed here independently:
+orbits re-solved with both steps divided by 16 and their multipliers from central differences
+of that fine map (no variational equations), bifurcation frequencies from another method at a
+finer step, grazing frequencies and xmax of a piecewise-linear stop from the exact linear
+solution."""
+import dataclasses
+import warnings
+
+import numpy as np
+import pytest
+import scipy.optimize
+
+import continuation as C
+import nlbeam
+from continuation.accuracy import combine, match_multipliers
+from continuation.refine import locate_extended
+from continuation.shooting import Integrator
+
+FINE = Integrator(dt_scale=1 / 16, steps_per_contact=512)
+PAPER = nlbeam.BeamImpact.paper()
+M2 = np.diag([0.03, 0.02])
+K2 = np.array([[900.0, -300.0], [-300.0, 600.0]])
+TWO_DOF = nlbeam.System(M2, 1e-4 * K2 + 0.1 * M2, K2,
+                        elements=(nlbeam.Contact(1, "hertz", 1e9, gap=0.0),))
+# a force-excited oscillator (1 Hz, damping ratio 0.02) with a one-sided linear stop 100 times
+# stiffer, met after a gap of 0.1 m
+K1, C1, GAP = 39.48, 0.2513, 0.1
+PWL = nlbeam.System([[1.0]], [[C1]], [[K1]], excitation_kind="force", y_load=[1.0],
+                    elements=(nlbeam.PiecewiseLinearStop(0, k=100 * K1, gap=GAP, on_base=False),))
+
+
+@pytest.fixture(autouse=True)
+def _quiet():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # few steps in a contact (coarse levels)
+        yield
+
+
+def fd_multipliers(model, amplitude, f, order, sol, integ):
+    """Eigenvalues of central differences of the period map of integrator integ, from the
+    first segment boundary of sol (which lies out of contact)."""
+    spp = integ.steps_per_period(model, f)
+    ex = nlbeam.Harmonic(amplitude, f)
+    x0, t0 = sol.states[0], sol.boundaries[0] / f
+
+    def period_map(x):
+        return nlbeam.flow(model, ex, x, t0, order / f, dt=1 / (f * spp),
+                           steps_per_contact=integ.steps_per_contact, warn=False).state
+
+    N = model.n_dof
+    w = 2 * np.pi * f / order
+    a = np.max(np.abs(x0[:N]) + np.abs(x0[N:]) / w)
+    sc = np.r_[np.full(N, a), np.full(N, a * w)]
+    M = np.empty((2 * N, 2 * N))
+    for k in range(2 * N):
+        e = np.zeros(2 * N)
+        e[k] = 1e-6 * sc[k]
+        M[:, k] = (period_map(x0 + e) - period_map(x0 - e)) / (2 * e[k])
+    return np.linalg.eigvals(M)
+
+
+def converged(model, amplitude, f, order, sol):
+    """(xmax, multipliers) of the orbit sol solved again at FINE, the multipliers from central
+    differences of FINE's period map."""
+    fine = C.periodic_solution(model, amplitude, f, order, guess=sol, integrator=FINE,
+                               error=False)
+    return fine.xmax, fd_multipliers(model, amplitude, f, order, fine, FINE)
+
+
+@pytest.mark.parametrize("name, model, amplitude, f, order", [
+    ("paper, harmonic, 40 Hz", PAPER, 1e-4, 40.0, 1),
+    ("paper, harmonic, 15 Hz", PAPER, 1e-4, 15.0, 1),
+    ("paper, period 2, 59 Hz", PAPER, 1e-4, 59.0, 2),
+    ("duffing", nlbeam.Duffing(m=1.0, b=0.1, k=1.0, k3=1.0), 0.2, 0.2, 1),
+    ("2-DOF hertz, 25 Hz", TWO_DOF, 1e-4, 25.0, 1),
+    ("2-DOF hertz, 15 Hz", TWO_DOF, 1e-4, 15.0, 1),
+    ("pwl stop, 1.0 Hz", PWL, 1.0, 1.0, 1),
+    ("pwl stop, 1.2 Hz", PWL, 1.0, 1.2, 1),
+])
+def test_orbit_error_estimates_bound_the_true_error(name, model, amplitude, f, order):
+    sol = C.periodic_solution(model, amplitude, f, order)
+    assert sol.minimal_order == order
+    xm, mu = converged(model, amplitude, f, order, sol)
+    mu = match_multipliers(sol.multipliers, mu)
+    true_x = abs(sol.xmax - xm)
+    true_mu = np.abs(sol.multipliers - mu)
+    # the estimate bounds the error (the reference's own error: ~1e-9 of the multipliers)...
+    assert true_x <= sol.xmax_error + 1e-12 * xm
+    assert np.all(true_mu <= sol.multipliers_error + 1e-9)
+    # ...and is not a vacuous bound: within a factor 10 of it (observed 1.5-2.1)
+    assert sol.xmax_error <= 10 * true_x + 1e-12 * xm
+    assert np.max(sol.multipliers_error) <= 10 * np.max(true_mu) + 1e-9
+
+
+def test_periodic_solution_meets_the_accuracy_asked_for():
+    """accuracy='default' (6 digits, multipliers 1e-5) halves the step until the estimate
+    meets it, and the converged values confirm it."""
+    sol = C.periodic_solution(PAPER, 1e-4, 40.0, accuracy="default")
+    assert np.max(sol.multipliers_error) <= 1e-5 and sol.xmax_error <= 1e-6 * sol.xmax
+    xm, mu = converged(PAPER, 1e-4, 40.0, 1, sol)
+    assert np.max(np.abs(sol.multipliers - match_multipliers(sol.multipliers, mu))) <= 1e-5
+    assert abs(sol.xmax - xm) <= 1e-6 * xm
+    with pytest.raises(ValueError, match="accuracy"):
+        C.periodic_solution(PAPER, 1e-4, 40.0, accuracy=20)
+
+
+def test_combine_bounds_the_error_of_geometric_sequences():
+    """Levels v_k = v* + c 2^(-q k) (+ a higher-order term): the reported value is within the
+    stated error of v*, and the stated error is not vacuous."""
+    v_star = 1.2345678
+    for q in (2.0, 3.0, 4.0):
+        for c in (1e-3, -2e-4):
+            for K in (1, 2, 3, 4):
+                h = 2.0 ** -np.arange(K + 1)
+                v = v_star + c * h ** q * (1 + 0.3 * h)
+                value, err = combine(v, floor=0.0)
+                assert abs(value - v_star) <= err
+                assert err <= abs(v[0] - v_star)  # better than the level-0 value's error
+    # no convergence pattern (alternating): the finest value, the last change as error
+    value, err = combine([1.0, 1.1, 1.05, 1.08], floor=0.0)
+    assert value == 1.08 and err == pytest.approx(0.03)
+
+
+def _bifurcation(frc, kind, near):
+    return min((b for b in frc.bifurcations if b.kind == kind),
+               key=lambda b: abs(b.frequency - near))
+
+
+def _fd_period_doubling(model, amplitude, f0, state0, integ):
+    """The period doubling near f0 of the orbit through state0 at integrator integ: the secant
+    method on the multiplier nearest -1 of central differences of the period map."""
+    sol = C.periodic_solution(model, amplitude, f0, guess=state0, integrator=integ, error=False)
+
+    def g(f):
+        nonlocal sol
+        sol = C.periodic_solution(model, amplitude, f, guess=sol, integrator=integ, error=False)
+        mu = fd_multipliers(model, amplitude, f, 1, sol, integ)
+        return mu[np.argmin(np.abs(mu + 1))].real + 1
+
+    fa, fb = f0, f0 * (1 + 1e-6)
+    ga, gb = g(fa), g(fb)
+    for _ in range(20):
+        fa, ga, fb = fb, gb, fb - gb * (fb - fa) / (gb - ga)
+        gb = g(fb)
+        if abs(fb - fa) < 1e-13 * fb:
+            break
+    return fb
+
+
+@pytest.fixture(scope="module")
+def pd_diagram():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s0 = C.periodic_solution(PAPER, 1e-4, 57.8, error=False).state0
+        frc = C.frequency_response(PAPER, 1e-4, (57.6, 58.5), orders=(1,),
+                                   brute_force_grid=False, starts=[(57.8, 1, s0)])
+    return frc
+
+
+def test_period_doubling_frequency_error_covers_the_converged_value(pd_diagram):
+    """Paper model, A = 0.1 mm: the period doubling near 58.08 Hz. Reference: the multiplier
+    -1 of central differences of the period map at dt / 8 (no variational equations; that
+    step converges to ~1e-9 relative)."""
+    bf = _bifurcation(pd_diagram, "period-doubling", 58.08)
+    ref = _fd_period_doubling(PAPER, 1e-4, bf.frequency, bf.state0,
+                              Integrator(dt_scale=1 / 8, steps_per_contact=256))
+    assert abs(bf.frequency - ref) <= bf.error
+    assert bf.error <= 1e-6 * bf.frequency  # the default target: 6 significant digits
+    # the diagram's own bracket is no error bar: the level-0 value is off by far more
+    assert abs(bf.levels[0] - ref) > 10 * bf.tolerance
+
+
+def test_high_accuracy_gives_eight_digits_without_a_separate_refine(pd_diagram):
+    """accuracy 8 digits on the same period doubling; reference: continuation.refine (the
+    extended system at dt / 4 .. dt / 32, Richardson; 9.7 digits)."""
+    from continuation.accuracy import bifurcation_levels
+    from continuation.refine import refine
+
+    bf = _bifurcation(pd_diagram, "period-doubling", 58.08)
+    at_level0 = dataclasses.replace(bf, value=bf.levels[0], frequency=bf.levels[0])
+    lv = bifurcation_levels(PAPER, 1e-4, at_level0, Integrator(), digits=8.0, max_levels=5)
+    ref = refine(PAPER, at_level0, 1e-4)
+    assert lv.error <= 1e-8 * lv.value
+    assert abs(lv.value - ref.value) <= lv.error + ref.tolerance
+
+
+def test_fold_frequency_error_covers_the_extended_system_at_a_finer_step():
+    """Paper model: the fold near 21.7321 Hz (harmonic branch). Reference: the extended system
+    R = 0, det(M - I) = 0 (continuation.refine, another criterion than the turning point
+    used by the estimator) at dt / 8 and dt / 16, extrapolated (its error ~1e-9 Hz)."""
+    frc = C.frequency_response(PAPER, 1e-4, (21.6, 21.9), orders=(1,), n_grid=4)
+    bf = _bifurcation(frc, "fold", 21.7321)
+    vals = []
+    s0 = (bf.state0, bf.disc0)
+    for k in (3, 4):
+        f, s0, _ = locate_extended(PAPER, 1e-4, bf.frequency, 1, s0, "fold",
+                                   Integrator().refined(k))
+        vals.append(f)
+    ref = vals[1] + (vals[1] - vals[0]) / 15
+    assert abs(bf.frequency - ref) <= bf.error
+    assert bf.error <= 1e-6 * bf.frequency
+
+
+def _linear_amplitude(f):
+    w = 2 * np.pi * f
+    return 1.0 / abs(K1 - w ** 2 + 1j * C1 * w)
+
+
+def test_piecewise_linear_stop_grazing_and_xmax_against_the_exact_linear_solution(tmp_path):
+    """Below the grazing frequency the orbit does not reach the stop: it is the linear
+    response, xmax = |X(f)| exactly, and the grazing point is where |X(f)| = gap."""
+    s0 = C.periodic_solution(PWL, 1.0, 0.75, error=False).state0
+    frc = C.frequency_response(PWL, 1.0, (0.2, 0.95), orders=(1,), brute_force_grid=False,
+                               starts=[(0.75, 1, s0)])
+    f_graze = scipy.optimize.brentq(lambda f: _linear_amplitude(f) - GAP, 0.7, 0.95,
+                                    xtol=1e-14)
+    g = _bifurcation(frc, "grazing", f_graze)
+    assert abs(g.frequency - f_graze) <= g.error
+    assert g.error < 1e-5 * f_graze
+    n_checked = 0
+    for b in frc.branches:
+        free = b.frequency < f_graze * (1 - 1e-4)
+        exact = np.array([_linear_amplitude(f) for f in b.frequency[free]])
+        true = np.abs(b.xmax[free] - exact)
+        assert np.all(true[b.error_sampled[free]] <= b.xmax_error[free][b.error_sampled[free]]
+                      + 1e-12)
+        n_checked += int(b.error_sampled[free].sum())
+    assert n_checked >= 3
+    # the estimates are saved and loaded
+    frc.save(tmp_path / "pwl.h5")
+    back = C.load(tmp_path / "pwl.h5")
+    for b0, b1 in zip(frc.branches, back.branches):
+        np.testing.assert_array_equal(b0.xmax_error, b1.xmax_error)
+        np.testing.assert_array_equal(b0.multipliers_error, b1.multipliers_error)
+        np.testing.assert_array_equal(b0.error_sampled, b1.error_sampled)
+    assert [b.error for b in back.bifurcations] == [b.error for b in frc.bifurcations]
