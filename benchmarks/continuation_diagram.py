@@ -29,15 +29,12 @@ A = 1e-4
 
 
 def harmonic_coverage(frc):
-    """One line: the frequency span the order-1 branches cover, and the gaps between them."""
-    iv = sorted((b.frequency.min(), b.frequency.max()) for b in frc.branches if b.order == 1)
-    gaps, hi = [], iv[0][1]
-    for lo_, hi_ in iv[1:]:
-        if lo_ > hi + 1e-9:
-            gaps.append((hi, lo_))
-        hi = max(hi, hi_)
-    return (f"harmonic branch covers {iv[0][0]:.3f}-{hi:.3f} Hz; gaps: "
-            + (", ".join(f"{a:.4f}-{b:.4f} Hz" for a, b in gaps) or "none"))
+    """One line: the frequency span the order-1 branches cover, and the gaps between them
+    inside f_range (FrequencyResponse.uncovered: a branch that ran onto another joins it)."""
+    iv = [(b.frequency.min(), b.frequency.max()) for b in frc.branches if b.order == 1]
+    gaps = frc.uncovered(1)
+    return (f"harmonic branch covers {min(a for a, _ in iv):.3f}-{max(b for _, b in iv):.3f} Hz;"
+            " gaps: " + (", ".join(f"{a:.4f}-{b:.4f} Hz" for a, b in gaps) or "none"))
 
 
 def figure(frc):

@@ -441,11 +441,12 @@ def _branch_problem(model, branch, i, integrator):
     p = float(branch.values[i])
     if branch.parameter not in ("frequency", "amplitude"):
         m0 = dataclasses.replace(model, **{branch.parameter: p})
-    prob = ShootingProblem(model, A, f, branch.order, branch.boundaries[i], integrator,
+    seg = ~np.isnan(branch.boundaries[i])  # (NaN: fewer segments at this point than others)
+    prob = ShootingProblem(model, A, f, branch.order, branch.boundaries[i][seg], integrator,
                            parameter=branch.parameter,
                            steps_per_period=integrator.steps_per_period(m0, f),
                            variational=branch.multipliers is not None)
-    u = np.asarray(branch.states[i], dtype=float).ravel()
+    u = np.asarray(branch.states[i][seg], dtype=float).ravel()
     prob.scale_u = prob.make_scale(u, p)
     return prob, u, p
 

@@ -13,7 +13,8 @@ from nlbeam.solver import period_step
 from ._newton import ContinuationWarning, ConvergenceError
 from .pathfollow import Tracer
 from .seeding import brute_force
-from .shooting import Integrator, ShootingProblem, _problem_from_state, forcing
+from .shooting import (Integrator, ShootingProblem, _problem_from_state, forcing,
+                       steady_state)
 
 
 @dataclass
@@ -23,12 +24,18 @@ class Branch:
     stable (n,) bool; multipliers (n, 2N) complex (largest modulus first), both None when the
     diagram was computed with stability=False (stability unknown); state0 (n, 2N) the
     state at t = 0; states (n, m, 2N) at the shooting boundaries, boundaries (n, m) their
-    excitation phases (periods); origin: 'brute-force', 'period-doubling' or 'start'; ends:
-    why the trace stopped at the first and at the last point ('left the parameter range',
-    'closed', 'stop' (ran onto a traced branch, or a switched branch back at its period
-    doubling), 'period-doubling' (the first point of a switched branch), 'step underflow'
-    (the corrector failed at every step size down to ds_min: a non-smooth or too unstable
-    map), 'no progress', 'max_points', 'could not move the segment boundaries'; '' unknown).
+    excitation phases (periods; NaN rows past a point's own number of segments, where a corner
+    was passed by multiple shooting); origin: 'brute-force', 'period-doubling', 'start' or
+    'gap' (seeded inside a part of the range no branch covered);
+    ends: why the trace stopped at the first and at the last point ('left the parameter
+    range', 'closed (isola)' (the branch is a closed curve and came round to its start),
+    'stop' (ran onto a traced branch, or a switched branch back at its period doubling),
+    'period-doubling' (the first point of a switched branch), 'stuck at a corner' (no
+    continuation through a point where the number of impacts changes passed the checks, see
+    frequency_response), 'step underflow' (the corrector failed at every step size down to
+    ds_min: a non-smooth or too unstable map), 'no progress', 'max_points', 'could not move
+    the segment boundaries'; '' unknown). The last five are ends where the tracer gave up:
+    the diagram's ContinuationWarning lists them.
     Accuracy (continuation.accuracy.branch_errors): xmax_error (n,) m and multipliers_error
     (n,) (the largest over each point's multipliers; None without stability) estimate the
     integration's error, computed at the points where error_sampled (n,) is True (every 10th,
@@ -56,8 +63,8 @@ class Branch:
 @dataclass
 class Bifurcation:
     """kind: 'fold', 'period-doubling', 'neimark-sacker' or 'grazing' (the number of impacts per
-    period changes: an orbit touches a stop with zero velocity; the flow map has a square-root
-    singularity there and the branch is continued past it by a jump, see Tracer.jump);
+    period changes: an orbit touches a stop with zero velocity; the flow map is not smooth
+    there and the branch is continued past it by a checked crossing, see frequency_response);
     frequency (Hz) and value of the continued parameter at the point; error: the estimated
     error of ``value`` (Hz for a frequency diagram) due to the integration, from the point
     located again with the step halved (continuation.accuracy.bifurcation_levels; the value is
@@ -125,6 +132,12 @@ class FrequencyResponse:
     n_points: int = 0
     version: str = nlbeam.__version__
 
+    def uncovered(self, order=1):
+        """The parts of p_range (list of (lo, hi)) that no branch of this order covers (a
+        branch that ran onto another counts as joined to it)."""
+        return _uncovered(_intervals([b for b in self.branches if b.order == order]),
+                          min(self.p_range), max(self.p_range))
+
     def save(self, path):
         """Write to HDF5 (atomically: a temporary file in the same folder, then os.replace;
         the usual file mode under the umask). The file format lives on the application floor
@@ -153,7 +166,14 @@ def _to_branch(points, order, parameter, origin, ends=("", "")):
     for i, pt in enumerate(points):
         m, A, f = pt.problem.setup(pt.p)
         freq[i], amp[i] = f, A
-        st0.append(pt.problem.state_at_zero(pt.u, pt.p)[0])
+        st0.append(pt.state0 if pt.state0 is not None  # (the tracer's signature of it)
+                   else pt.problem.state_at_zero(pt.u, pt.p)[0])
+    m_max = max(pr.n_seg for pr in probs)
+    states = np.full((n, m_max, probs[0].N2), np.nan)  # NaN: fewer segments at that point
+    bounds = np.full((n, m_max), np.nan)
+    for i, (pt, pr) in enumerate(zip(points, probs)):
+        states[i, :pr.n_seg] = pt.u.reshape(pr.n_seg, pr.N2)
+        bounds[i, :pr.n_seg] = pr.boundaries
     if any(p.multipliers is None for p in points):  # stability not computed
         mu = stable = None
     else:
@@ -162,9 +182,7 @@ def _to_branch(points, order, parameter, origin, ends=("", "")):
     return Branch(order=order, parameter=parameter, values=values, frequency=freq, amplitude=amp,
                   xmax=np.array([p.xmax for p in points]),
                   stable=stable, multipliers=mu, state0=np.array(st0),
-                  states=np.array([p.u.reshape(pr.n_seg, pr.N2) for p, pr in zip(points, probs)]),
-                  boundaries=np.array([pr.boundaries for pr in probs]), origin=origin,
-                  ends=tuple(ends))
+                  states=states, boundaries=bounds, origin=origin, ends=tuple(ends))
 
 
 def _bifurcation(L, order, branch):
@@ -177,11 +195,14 @@ def _bifurcation(L, order, branch):
 
 
 def _both_ways(tracer, prob, u, p, stop=None):
-    """Trace from (u, p) both ways: (points, located, (reason at the first point, at the last))."""
+    """Trace from (u, p) both ways: (points, located, (reason at the first point, at the last)).
+    The second half is traced knowing the first (``Tracer.trace(prior=...)``): where it runs
+    onto it, the branch is a closed curve."""
     fwd, loc_f, reason = tracer.trace(prob, u, p, direction=1, stop=stop)
-    if reason == "closed":
-        return fwd, loc_f, ("closed", "closed")
-    bwd, loc_b, reason_b = tracer.trace(prob, u, p, direction=-1, stop=stop)
+    if reason.startswith("closed"):
+        return fwd, loc_f, (reason, reason)
+    bwd, loc_b, reason_b = tracer.trace(prob, u, p, direction=-1, stop=stop,
+                                        prior=tracer.retrace.export())
 
     nb = len(bwd)
     pts = bwd[::-1][:-1] + fwd
@@ -462,19 +483,46 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
             f"{len(br.values)} points, {len(bifs) - n_bifs} bifurcations, ends: "
             f"{br.ends[0]} / {br.ends[1]} ({time.perf_counter() - t_start:.1f} s)")
 
+    def trace_from(f, order, sol_prob, u, p, origin):
+        """The branch through the polished start (sol_prob, u, p), unless it lies on a traced
+        branch."""
+        ev = sol_prob.evaluate(u, p, jac=False, jac_p=False)
+        if _on_branch(branches, order, f, ev.xmax,
+                      lambda: _shifted_states(sol_prob, u, p)) is not None:
+            return
+        tracer.label = f"order-{order} branch (from {f:.6g} Hz)"
+        pts, loc, ends = _both_ways(tracer, sol_prob, u, p, stop=_overlap_stop(branches, order))
+        add(pts, loc, order, origin, ends)
+
+    def fill_gaps(order, max_seeds=8):
+        """Seed branches of this order inside the parts of p_range no branch covers (the
+        tracer gave up at their ends, or the grid found no attractor there): from the steady
+        state of an integration at the middle of each gap, then at its quarter points."""
+        n_seeds = 0
+        for fracs in ((0.5,), (0.25, 0.75)):
+            for a, c in _gaps_to_seed(branches, p_range, order):
+                for fr in fracs:
+                    if n_seeds >= max_seeds:
+                        return
+                    f = a + fr * (c - a)
+                    n_seeds += 1
+                    try:
+                        s0 = steady_state(model, amplitude, f, integrator=integrator)
+                    except nlbeam.IntegrationError:
+                        continue
+                    for (f2, n2, sol_prob, u, p, _) in _polished_starts(
+                            model, amplitude, frequency, parameter, (order,),
+                            [(f, order, s0, False)], segments, integrator, variational,
+                            tracer.tol, []):
+                        trace_from(f2, n2, sol_prob, u, p, "gap")
+
     handled = set()
     for order in sorted(orders):
         for (f, n, sol_prob, u, p, asked) in seeds:
-            if n != order:
-                continue
-            ev = sol_prob.evaluate(u, p, jac=False, jac_p=False)
-            if _on_branch(branches, order, f, ev.xmax,
-                          lambda: _shifted_states(sol_prob, u, p)) is not None:
-                continue
-            tracer.label = f"order-{order} branch (from {f:.6g} Hz)"
-            pts, loc, ends = _both_ways(tracer, sol_prob, u, p,
-                                        stop=_overlap_stop(branches, order))
-            add(pts, loc, order, "start" if asked else "brute-force", ends)
+            if n == order:
+                trace_from(f, n, sol_prob, u, p, "start" if asked else "brute-force")
+        if order == 1 and brute and parameter == "frequency":
+            fill_gaps(order)
         # branch switching at period doublings of this order
         if switch and 2 * order in orders:
             for k, (pt, o, bi) in enumerate(pd_points):
@@ -533,25 +581,109 @@ def _warn_hidden(dropped, branches, orders, n_grid, p_range):
             ContinuationWarning, stacklevel=4)
 
 
-_EARLY_ENDS = ("step underflow", "max_points", "could not move the segment boundaries")
+_EARLY_ENDS = ("step underflow", "max_points", "could not move the segment boundaries",
+               "stuck at a corner")
+_GAVE_UP = _EARLY_ENDS + ("no progress",)  # ends where the tracer gave up (the orbit goes on)
 
 
-def _warn_early_ends(branches, p_range):
-    """One ContinuationWarning listing the branch ends inside p_range where the tracer gave up
-    (not where a branch left the range, closed, or ran onto another branch)."""
+def _intervals(branches):
+    """(lo, hi) parameter interval of each branch; an end where the branch ran onto a traced
+    one ('stop', see _on_branch: within 2e-3 relative plus a twentieth of a segment) is
+    widened by that tolerance and its last step, so that the two count as joined."""
+    out = []
+    for b in branches:
+        v = np.asarray(b.values, dtype=float)
+        lo, hi = float(v.min()), float(v.max())
+        for reason, k, k2 in ((b.ends[0], 0, 1), (b.ends[1], -1, -2)):
+            if reason == "stop" and len(v) > 1:
+                tol = 2e-3 * abs(v[k]) + abs(v[k] - v[k2])
+                if v[k] == lo:
+                    lo -= tol
+                if v[k] == hi:
+                    hi += tol
+        out.append((lo, hi))
+    return out
+
+
+def _gaps_to_seed(branches, p_range, order):
+    """The parts of p_range that no branch of the order covers, except those next to a branch
+    end that ran out of its point budget (max_points: the caller limited the work)."""
     lo, hi = min(p_range), max(p_range)
-    where = []
+    bs = [b for b in branches if b.order == order]
+    iv = _intervals(bs)
+    out = []
+    for a, c in _uncovered(iv, lo, hi):
+        budget = [v for b in bs for r, v in ((b.ends[0], b.values[0]), (b.ends[1], b.values[-1]))
+                  if r == "max_points" and min(abs(v - a), abs(v - c)) <= 1e-9 * (hi - lo)]
+        if not budget:
+            out.append((a, c))
+    return out
+
+
+def _uncovered(intervals, lo, hi):
+    """Parts of [lo, hi] outside the union of the intervals (each (a, b), a <= b), as a list of
+    (a, b); gaps narrower than 1e-9 of the range are ignored."""
+    tol = 1e-9 * (hi - lo)
+    gaps, cur = [], lo
+    for a, b in sorted(intervals):
+        if b < lo or a > hi:
+            continue
+        if a > cur + tol:
+            gaps.append((cur, a))
+        cur = max(cur, b)
+    if cur < hi - tol:
+        gaps.append((cur, hi))
+    return gaps
+
+
+def _coverage(branches, p_range, orders):
+    """(gaps, early): the parts of p_range that no branch of a requested order covers, as
+    (order, a, b, why), and the branch ends inside p_range where the tracer gave up, as text.
+    Order 1 (a forced dissipative system has a periodic orbit of the excitation's period at
+    every parameter value): every gap. Orders > 1 (subharmonics exist over parts of the range
+    only): the gaps next to a branch end where the tracer gave up."""
+    lo, hi = min(p_range), max(p_range)
+    early = []
     for i, b in enumerate(branches):
         for reason, v in ((b.ends[0], b.values[0]), (b.ends[1], b.values[-1])):
-            if reason in _EARLY_ENDS and lo < v < hi:
-                where.append(f"branch {i + 1} (order {b.order}) at {v:.6g} ({reason})")
-    if where:
+            if reason in _GAVE_UP and lo < v < hi:
+                early.append(f"branch {i + 1} (order {b.order}) at {v:.6g} ({reason})")
+    gaps = []
+    for order in orders:
+        bs = [b for b in branches if b.order == order]
+        for a, c in _uncovered(_intervals(bs), lo, hi):
+            ends = [(r, v) for b in bs for r, v in ((b.ends[0], b.values[0]),
+                                                    (b.ends[1], b.values[-1]))
+                    if r in _GAVE_UP and min(abs(v - a), abs(v - c)) <= 1e-9 * (hi - lo)]
+            if order == 1 or ends:
+                why = (f"next to a branch end where the tracer gave up ({ends[0][0]})" if ends
+                       else "no branch" if not bs else "no branch reaches it")
+                gaps.append((order, a, c, why))
+    return gaps, early
+
+
+def _warn_coverage(branches, p_range, orders, parameter, unit, what_to_try):
+    """One ContinuationWarning listing every part of p_range that no branch of a requested
+    order covers (see ``_coverage``) and the branch ends inside it where the tracer gave up;
+    an empty diagram always warns."""
+    gaps, early = _coverage(branches, p_range, orders)
+    unit = f" {unit}" if unit else ""
+    parts = []
+    if not branches:
+        parts.append(f"no branch of order(s) {', '.join(map(str, orders))} was found between "
+                     f"{min(p_range):.6g} and {max(p_range):.6g}{unit}")
+    if gaps:
+        parts.append("not covered: " + "; ".join(
+            f"order {o}: {a:.6g}-{c:.6g}{unit} ({why})" for o, a, c, why in gaps))
+    if early:
+        parts.append(f"{len(early)} branch end(s) inside the range where the tracer gave up: "
+                     + "; ".join(early))
+    if parts:
         warnings.warn(
-            f"continuation: {len(where)} branch end(s) inside the range where the tracer gave up: "
-            + "; ".join(where) + ". The diagram may miss what lies beyond them; try finer "
-            "integration (dt_scale=0.5, steps_per_contact=64), multiple shooting (segments=4), "
-            "a smaller ds_max or max_points larger. Branch.ends says why each branch ended.",
-            ContinuationWarning, stacklevel=3)
+            f"continuation: the {parameter} range is not fully covered: " + ". ".join(parts)
+            + ". The diagram may miss what lies there; " + what_to_try
+            + " Branch.ends says why each branch ended.", ContinuationWarning, stacklevel=3)
+    return gaps, early
 
 
 def _polish(prob, u0, p, tol):
@@ -638,10 +770,28 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
 
     f_range: (f_lo, f_hi) Hz. Branches of each order in ``orders`` start from periodic
     attractors found by integration on a grid of n_grid frequencies (sweeping up and down;
-    isolas too) and by branch switching at period doublings (order n -> 2n). Each branch is
+    isolas too) and by branch switching at period doublings (order n -> 2n). Where no order-1
+    branch covers part of f_range (the tracer gave up at both sides of it), branches are
+    seeded from integrations to the steady state inside it (its middle, then its quarter
+    points; origin 'gap'), unless the point budget ended the branches there. Each branch is
     followed by pseudo-arclength continuation (adaptive step ds in scaled units, at most
     max_angle rad between tangents) until it leaves f_range or closes. Folds, period doublings
     and Neimark-Sacker points are located to a bracket of bif_tol relative width in f.
+
+    Corners: where the number of impacts per period changes (a grazing orbit), the flow map is
+    not smooth and the branch may go straight through or turn back. It turns back only where
+    a real multiplier passes +1 (the sign of prod(mu - 1) changes: a fold, smooth or at the
+    corner); every step through a corner is checked for that and for joining the two sides
+    through the grazing point (bisection of the chord). Where steps fail at a corner the
+    tracer tries, in turn: fixed-frequency solves on the far side, beyond the corner and (for
+    a fold) behind it, each checked the same way; shorter steps; multiple shooting (2, then 4
+    segments). If all fail the branch ends with 'stuck at a corner' and a ContinuationWarning
+    naming the frequency. A point that runs back along a stretch the branch has already
+    traced is caught at once: its stretch is dropped and the corner passed again; a branch
+    that comes round to its start ends as 'closed (isola)'. Branch.ends says why each branch
+    ended (see Branch). One ContinuationWarning lists every part of f_range that no branch of
+    order 1 covers, the gaps next to branch ends of higher orders where the tracer gave up,
+    and those ends; an empty diagram always warns.
     starts: extra (frequency, order, state at t = 0) starting points.
     stability=False: no variational equations and no Floquet multipliers (quasi-Newton
     corrector from forward differences and secant updates): every branch has ``stable`` and
@@ -673,7 +823,11 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
                                      tracer, integrator, segments, n_grid,
                                      switch and stability, list(starts), brute_force_grid,
                                      variational=stability, progress=progress)
-    _warn_early_ends(branches, (f_lo, f_hi))
+    _warn_coverage(branches, (f_lo, f_hi), orders, "frequency", "Hz",
+                   "try a start inside it (starts=[(f, order, state0)], e.g. from "
+                   "periodic_solution), a finer brute-force grid (n_grid), finer integration "
+                   "(dt_scale=0.5, steps_per_contact=64), multiple shooting (segments=4), a "
+                   "smaller ds_max or max_points larger.")
     sup = _superharmonics(branches, model, integrator)
     frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=float(amplitude),
                             parameter="frequency", p_range=(f_lo, f_hi), branches=branches,
@@ -691,9 +845,11 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
                        ds=0.02, ds_max=0.5, max_angle=0.2, max_points=1000, tol=1e-10,
                        bif_tol=1e-8, accuracy=None, **integrator_kw):
     """Follow a PeriodicSolution of ``model`` in ``parameter`` ('amplitude', 'frequency', or a
-    model field such as 'e' or 'K_hertz') over p_range, both ways. Returns a FrequencyResponse
-    with one branch (and the bifurcations on it). accuracy: as for frequency_response (errors
-    in the units of the parameter)."""
+    model field such as 'e' or 'K_hertz') over p_range, both ways, through corners as in
+    frequency_response. Returns a FrequencyResponse with one branch (and the bifurcations on
+    it); a ContinuationWarning lists the parts of p_range the branch does not cover (for an
+    order-1 solution; for higher orders the gaps next to ends where the tracer gave up).
+    accuracy: as for frequency_response (errors in the units of the parameter)."""
     integrator = integrator or Integrator(**integrator_kw)
     lo, hi = map(float, p_range)
     tracer = Tracer(p_min=lo, p_max=hi, ds=ds, ds_max=ds_max, max_angle=max_angle,
@@ -706,7 +862,11 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
     prob, u, p = _polish(prob, u0, prob.value(), tol)
     pts, loc, ends = _both_ways(tracer, prob, u, p)
     br = _to_branch(pts, solution.order, parameter, "start", ends)
-    _warn_early_ends([br], (lo, hi))
+    _warn_coverage([br], (lo, hi), (solution.order,), parameter,
+                   "Hz" if parameter == "frequency" else "",
+                   "try continuing from a solution inside it, finer integration (dt_scale=0.5, "
+                   "steps_per_contact=64), multiple shooting (segments=4), a smaller ds_max or "
+                   "max_points larger.")
     bifs = []
     for L in loc:
         bifs.append(_bifurcation(L, solution.order, 0))

@@ -11,6 +11,7 @@ from typing import Protocol
 import numpy as np
 
 from ._newton import ContinuationWarning, ConvergenceError
+from .corners import Retrace, check_crossing, far_side, tangent
 
 KINDS = ("fold", "period-doubling", "neimark-sacker")  # from the test functions
 
@@ -38,13 +39,21 @@ class Problem(Protocol):
       ``jacobian_u``, which such a problem must then provide;
     - ``jacobian_u(u, p, ev=None)`` -> dR/du (n, n) by differences (default: raises);
     - ``settle(u, p, p_new, efolds)`` -> u at p_new of the attractor reached from the orbit u
-      at p (the second way past a non-smooth point in ``Tracer.jump``; default: raises
-      ConvergenceError, so that way is skipped).
+      at p (one of the ways past a corner in ``corners.far_side``; default: raises
+      ConvergenceError, so that way is skipped);
+    - ``parameter`` (default 'p'): the parameter's name, for messages;
+    - ``signature(u, p)`` -> a vector that identifies the orbit independently of how the
+      unknowns are defined (the retrace detector compares points by it across ``adapt``;
+      default: u);
+    - ``n_seg`` (default 1) and ``with_segments(u, p, n_seg)`` -> (problem, u) of the same orbit
+      with n_seg shooting segments (the last way past a corner; default: None, not offered).
     """
 
     scale_u: np.ndarray
     scale_p: float
     variational: bool = True
+    parameter: str = "p"
+    n_seg: int = 1
 
     def evaluate(self, u, p, jac=True, jac_p=True): ...
 
@@ -65,6 +74,12 @@ class Problem(Protocol):
     def settle(self, u, p, p_new, efolds=8.0):
         raise ConvergenceError(f"settle: not offered by {type(self).__name__}")
 
+    def signature(self, u, p):
+        return np.asarray(u, dtype=float)
+
+    def with_segments(self, u, p, n_seg):
+        return None
+
 
 @dataclass
 class Point:
@@ -77,6 +92,9 @@ class Point:
     jac: np.ndarray | None = None  # scaled [dR/du | dR/dp] (n, n + 1) at the point (quasi-Newton)
     corr: np.ndarray | None = None  # its secant correction (see Tracer.correct)
     tangent: np.ndarray | None = None  # unit tangent (scaled) in the direction of travel
+    how: str = "step"  # how it was reached: 'start', 'step', 'corner' (a step through a
+    # grazing point, checked), 'jump' (a fixed-parameter solve past a corner)
+    state0: np.ndarray | None = None  # Problem.signature (shooting: the state at phase zero)
 
 
 @dataclass
@@ -109,15 +127,6 @@ def _scaled(ev, w, wp):
     return ev.R / w, J
 
 
-def tangent(J, t_prev):
-    """Unit null vector of J (n, n+1) with a positive projection on t_prev."""
-    A = np.vstack([J, t_prev[None, :]])
-    b = np.zeros(A.shape[0])
-    b[-1] = 1.0
-    t = np.linalg.solve(A, b)
-    return t / np.linalg.norm(t)
-
-
 class Tracer:
     """Follows one branch of a ``Problem``. Options: p_min, p_max (stop outside), ds (initial
     step, scaled), ds_min, ds_max, max_angle (rad, between successive tangents), max_points,
@@ -129,6 +138,12 @@ class Tracer:
     branch whose last ``progress_points`` points together advance less than ``progress_min``
     in scaled arclength is stopped with a ContinuationWarning), label (names the branch in
     that warning).
+    Corners (where the number of impacts per period changes; see continuation.corners):
+    fold_margin (a real multiplier closer than this to +1 leaves the fold sign uncertain),
+    turn_tol (a tangent's parameter component below this leaves the direction uncertain),
+    retrace_tol (a point within this fraction of a segment's length of a traced segment
+    re-enters it), corner_segments (shooting segments tried, in turn, at a corner that single
+    shooting cannot pass).
 
     The corrector is a quasi-Newton iteration on the bordered system: the Jacobian at the
     predictor is dR/du from the variational equations (or, for a problem without them, the
@@ -144,7 +159,8 @@ class Tracer:
                  max_angle=0.15, max_points=3000, tol=1e-10, bif_tol=1e-10, detect=True,
                  max_iter=10, jump_after=2, jump_steps=(1e-5, 1e-4, 1e-3), jump_max_distance=0.05,
                  grazing_iter=8, grazing_ds=0.01, contraction=0.7, noise_tol=1e-7,
-                 progress_points=40, progress_min=2e-3, label="branch"):
+                 progress_points=40, progress_min=2e-3, label="branch", fold_margin=0.05,
+                 turn_tol=1e-3, retrace_tol=0.1, corner_segments=(2, 4)):
         self.p_min, self.p_max = p_min, p_max
         self.ds0, self.ds_min, self.ds_max = ds, ds_min, ds_max
         self.max_angle = max_angle
@@ -163,6 +179,10 @@ class Tracer:
         self.progress_points = progress_points
         self.progress_min = progress_min
         self.label = label
+        self.fold_margin = fold_margin
+        self.turn_tol = turn_tol
+        self.retrace_tol = retrace_tol
+        self.corner_segments = tuple(corner_segments)
         self.n_evaluations = 0
         self.debug = False
 
@@ -239,6 +259,7 @@ class Tracer:
         r_prev = None
         z_prev = ev_prev = None  # the previous iterate and its evaluation
         self.impacts_seen = set()
+        self.iterates = []  # (z, number of impacts) of every iterate evaluated
         for it in range(1, self.max_iter + 1):
             try:
                 ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=var, jac_p=False)
@@ -246,6 +267,7 @@ class Tracer:
                 break
             self.n_evaluations += 1
             self.impacts_seen.add(ev.n_impacts)
+            self.iterates.append((z, ev.n_impacts))
             r = ev.R / w
             res = float(np.max(np.abs(r)))
             if self.debug:
@@ -308,18 +330,103 @@ class Tracer:
         return np.array([pt.tangent[-1], 0.0, 0.0])
 
     # --- one branch ---------------------------------------------------------------------------
-    def trace(self, prob, u0, p0, direction=1, stop=None, t0=None):
+    def _state0(self, prob, pt):
+        """The point with its signature (``Problem.signature``; for shooting the state at
+        excitation phase zero), by which ``Retrace`` compares points."""
+        if pt.state0 is None:
+            pt.state0 = np.asarray(prob.signature(pt.u, pt.p), dtype=float)
+        return pt
+
+    def _rebase(self, prob2, u2, pts, direction):
+        """Move the branch's last point into the problem prob2 (same orbit, other unknowns:
+        boundaries moved, step level changed, more segments), solved from u2. Returns (z, t,
+        z_first, t_first) in prob2's scaled unknowns; raises ConvergenceError."""
+        pt = pts[-1]
+        u2, _, _, _ = prob2.solve(u2, pt.p, tol=self.tol)
+        w, wp = prob2.scale_u, prob2.scale_p
+        z = np.r_[u2 / w, pt.p / wp]
+        ev2 = prob2.evaluate(u2, pt.p, jac=True, jac_p=True)
+        if len(pts) > 1:
+            z_prev = np.r_[prob2.transfer(pts[-2].problem, pts[-2].u, pts[-2].p) / w,
+                           pts[-2].p / wp]
+            sec = z - z_prev
+            t = sec / np.linalg.norm(sec)
+        else:
+            t = np.zeros(len(z))
+            t[-1] = float(direction)
+        new = self._point(prob2, z, ev2, t)
+        new.how, new.state0 = pt.how, pt.state0
+        pts[-1] = new
+        if len(pts) == 1:
+            t = new.tangent
+        z_first = np.r_[prob2.transfer(pts[0].problem, pts[0].u, pts[0].p) / w, pts[0].p / wp]
+        t_first = t
+        if len(pts) > 1:
+            z1 = np.r_[prob2.transfer(pts[1].problem, pts[1].u, pts[1].p) / w, pts[1].p / wp]
+            t_first = (z1 - z_first) / np.linalg.norm(z1 - z_first)
+        return z, t, z_first, t_first
+
+    def _more_segments(self, prob, pt):
+        """(problem, u) of the orbit pt with the next number of shooting segments in
+        ``corner_segments`` (multiple shooting), or None."""
+        nxt = [k for k in self.corner_segments if k > prob.n_seg]
+        if not nxt:
+            return None
+        try:
+            return prob.with_segments(pt.u, pt.p, nxt[0])
+        except (ConvergenceError, ValueError):
+            return None
+
+    def _warn_stuck(self, prob, p):
+        name = prob.parameter
+        warnings.warn(
+            f"continuation: the {self.label} is stuck at a corner near {name} = {p:.9g}: the "
+            "number of impacts per period changes there, and no continuation across it passed "
+            "the checks (the far side must join the branch through the grazing point, and the "
+            "branch may turn back only where a multiplier passes +1); tried: jumps across from "
+            f"both sides at relative distances {', '.join(f'{s:g}' for s in self.jump_steps)},"
+            f" steps down to {self.ds_min:g}, segments={', '.join(map(str, self.corner_segments))}"
+            ". The branch ends there ('stuck at a corner'). Try finer integration (dt_scale=0.5,"
+            " steps_per_contact=64), multiple shooting from the start (segments=4), or a start "
+            "beyond the corner (starts=...)", ContinuationWarning, stacklevel=3)
+
+    def _warn_unverified(self, prob, p_a, p_b):
+        warnings.warn(
+            f"continuation: the {self.label} passed a corner near {prob.parameter} = {p_a:.9g} "
+            f"to {p_b:.9g} without proof that the far side joins it: no other way passed, and "
+            "the bisection between the two could not be finished (the flow map is rough "
+            "there: contacts that graze or nearly stick). Check that stretch with finer "
+            "integration (dt_scale=0.5, steps_per_contact=64)", ContinuationWarning,
+            stacklevel=3)
+
+    def trace(self, prob, u0, p0, direction=1, stop=None, t0=None, prior=None):
         """Follow the branch through the solution (u0, p0) in the direction of increasing p
         (direction=1) or decreasing p (-1), or along t0 (scaled tangent) if given.
-        ``stop(point) -> bool`` ends the branch (the point is kept). The predictor follows the
-        secant through the last two points (the Jacobian's tangent at the first), and the step
-        adapts to the angle between successive secants (target ``max_angle / 2``; the secant
-        measures the branch's curvature even where the Jacobian is only approximate) and to
-        the corrector's iterations. Where the number of impacts per period changes between two
-        points (a grazing orbit in between: the flow map has a square-root singularity there),
-        the grazing point is bracketed; where the corrector fails repeatedly, the branch is
-        continued by a natural-parameter step beyond the failure (``jump``) when the failed
-        corrector's iterates changed the number of impacts (a grazing point ahead).
+        ``stop(point) -> bool`` ends the branch (the point is kept). prior: the other half of
+        the branch (``Retrace.export()`` of its trace from the same first point), so that a
+        half that runs onto the other is caught. The predictor follows the secant through the
+        last two points (the Jacobian's tangent at the first), and the step adapts to the angle
+        between successive secants (target ``max_angle / 2``; the secant measures the
+        branch's curvature even where the Jacobian is only approximate) and to the corrector's
+        iterations.
+
+        Corners (the number of impacts per period changes between two points: a grazing orbit
+        in between, where the flow map is not smooth) are approached with steps of at most
+        ``grazing_ds`` and every step through one is checked (``corners.check_crossing``): the
+        two sides must join through the grazing point, which is bracketed, and the branch may
+        turn back there only where the sign of prod(mu - 1) changes (a non-smooth fold,
+        reported as a fold); the far side is then followed away from the grazing point. Where
+        the corrector fails near a corner, the strategies are, in turn: fixed-parameter solves
+        on the far side, beyond the corner and behind it, each checked the same way
+        (``corners.far_side``); shorter steps, down to ds_min; a far-side solution that passed
+        every check but the bisection joining it, which could not be finished (taken with a
+        ContinuationWarning); multiple shooting (``corner_segments``); else the branch stops
+        with end reason 'stuck at a corner' and a ContinuationWarning naming the parameter
+        value. Every new point is compared with the
+        points traced so far (``corners.Retrace``): one that runs back along a traced stretch
+        (a corner that failed unnoticed) is dropped with what followed the last corner before
+        it, and the corner is passed again by the far-side solves, avoiding it; one that runs
+        along the branch's beginning again ends the branch as 'closed (isola)'.
         A branch that makes no progress (see the class doc) stops with a ContinuationWarning.
         Returns (points, located, reason)."""
         w, wp = prob.scale_u, prob.scale_p
@@ -329,96 +436,245 @@ class Tracer:
         e_p = np.zeros(len(z))
         e_p[-1] = float(direction)
         pt0 = self._point(prob, z, ev, e_p if t0 is None else t0)
+        pt0.how = "start"
         t = pt0.tangent
-        pts = [pt0]
+        pts = [self._state0(prob, pt0)]
         tfs = [self._tests(pt0)]
+        retrace = Retrace(self.retrace_tol, prob.scale_u, prob.scale_p, prior)
+        retrace.add(pt0, z, 0.0)
         located = []
         ds = self.ds0
         z_first = z.copy()
         t_first = t.copy()
+        t_in = t.copy()  # the direction of travel at the last point (trial steps may change t)
         reason = "max_points"
         n_fail = 0
         tried_jump = near_grazing = False
         ds_ok = ds
         self._creeps = 0
+        self.unverified = None  # (problem, point, far-side candidate): see corners.far_side
         steps = []  # scaled arclength of each accepted step (the no-progress rule)
         angle_rej = np.inf  # the angle of the last step rejected for its angle
+        guesses = []  # far-side states (scaled) that failed steps saw near the last point
+        avoid = []  # (problem, scaled state) of points dropped after a retrace
+        forced = False  # after a retrace: pass the corner by far-side solves first
+        rolled = {}  # rollbacks per point index
+        avoid_until = 0  # avoid is cleared once the branch has this many points
+        budget = None  # failed steps left with more shooting segments at a corner (None: any)
+        far_failed = None  # (problem, scaled p) where the far-side solves last found nothing
         while len(pts) < self.max_points:
             jumped = False
-            try:
-                zn, evn, iters = self.correct(prob, z + ds * t, t, pts[-1].corr)
-                ptn = self._point(prob, zn, evn, t)
-                tn = (zn - z) / np.linalg.norm(zn - z)  # secant: the next predictor
-                angle = float(np.arccos(np.clip(t @ tn, -1, 1)))
-                ok = angle <= self.max_angle
-                if ok and ptn.n_impacts != pts[-1].n_impacts and ds > self.grazing_ds:
-                    ok = False  # a grazing point ahead: approach it with short steps, so that
-                    # it is bracketed closely and the step does not cut a corner of the branch
-                    angle = np.nan
-            except ConvergenceError:
-                ok = False
-                iters = self.max_iter
-                angle = np.inf
-            if not ok and self.impacts_seen - {pts[-1].n_impacts}:
-                near_grazing = True  # the corrector's iterates changed the number of impacts
-            if self.debug:
-                print("ds %.3g ok %s iters %d angle %.3g p %.9g" % (ds, ok, iters, angle,
-                                                                 z[-1] * prob.scale_p))
+            crossing = None
+            ok = False
+            iters = self.max_iter
+            angle = np.inf
+            seen = set()
+            if len(pts) > avoid_until:
+                avoid = []
+            strict = any(q is prob for q, _ in avoid)
+            if not forced:
+                try:
+                    zn, evn, iters = self.correct(prob, z + ds * t, t, pts[-1].corr)
+                    seen = set(self.impacts_seen)
+                    iterates = list(self.iterates)
+                    ptn = self._point(prob, zn, evn, t)
+                    tn = (zn - z) / np.linalg.norm(zn - z)  # secant: the next predictor
+                    angle = float(np.arccos(np.clip(t @ tn, -1, 1)))
+                    ok = angle <= self.max_angle
+                    if ptn.n_impacts != pts[-1].n_impacts:
+                        guesses.append(zn)
+                        if ds > self.grazing_ds:
+                            ok = False  # a grazing point ahead: approach it with short steps,
+                            # so that it is bracketed closely and no step cuts a corner
+                            angle = np.nan
+                        else:
+                            crossing = check_crossing(self, prob, pts[-1], z, t_in, ptn, zn,
+                                                      strict=strict or not ok)
+                            ok = crossing is not None
+                            if ok:
+                                ptn.tangent = crossing.t_far
+                                if crossing.turn or angle > self.max_angle:
+                                    tn = crossing.t_far  # the far side, away from the corner
+                    if ok and strict and _near_any(prob, zn, z, avoid):
+                        ok = False
+                except ConvergenceError:
+                    seen = set(self.impacts_seen)
+                    iterates = list(self.iterates)
+                far = [zi for zi, ni in iterates if ni != pts[-1].n_impacts]
+                if far:
+                    guesses.append(far[-1])
+                if not ok and seen - {pts[-1].n_impacts}:
+                    near_grazing = True  # the corrector's iterates changed the number of impacts
+                if self.debug:
+                    print("ds %.3g ok %s iters %d angle %.3g p %.9g" % (
+                        ds, ok, iters, angle, z[-1] * prob.scale_p))
             if not ok:
                 n_fail += 1
-                if np.isfinite(angle) and angle > 0.7 * angle_rej:
-                    # the angle does not shrink with the step: the predictor's direction (the
-                    # last secant) is off, e.g. after a corner; the short trial step's secant
-                    # is the local tangent
-                    t = tn
-                angle_rej = angle if np.isfinite(angle) else np.inf
-                ds *= 0.5
-                if (n_fail >= self.jump_after and near_grazing and not tried_jump
-                        and self.jump_steps):
+                if budget is not None:
+                    budget -= 1
+                if not forced:
+                    if np.isfinite(angle) and angle > 0.7 * angle_rej:
+                        # the angle does not shrink with the step: the predictor's direction
+                        # (the last secant) is off, e.g. after a corner; the short trial
+                        # step's secant is the local tangent
+                        t = tn
+                    angle_rej = angle if np.isfinite(angle) else np.inf
+                    ds *= 0.5
+                again = (far_failed is not None and far_failed[0] is prob
+                         and abs(z[-1] - far_failed[1])
+                         < self.jump_steps[0] * max(abs(z[-1]), 1e-3))
+                if self.jump_steps and (forced or (n_fail >= self.jump_after and near_grazing
+                                                   and not tried_jump and not again)):
                     tried_jump = True
-                    res = self.jump(prob, pts[-1], t)
+                    near_grazing = True
+                    res = far_side(self, prob, pts[-1], z, t_in, guesses[-3:],
+                                   [v for q, v in avoid if q is prob])
                     if res is not None:
-                        zn, evn, tn = res
-                        ptn = self._point(prob, zn, evn, tn)  # tn: the Jacobian's tangent
-                        # (the secant across the jump is no tangent of the far side)
+                        zn, evn, ptn, crossing = res
+                        if crossing is not None:
+                            tn = crossing.t_far  # away from the corner
+                        else:  # a creep: the Jacobian's tangent, in the direction of travel
+                            e_s = np.zeros(len(z))
+                            e_s[-1] = 1.0 if t_in[-1] >= 0 else -1.0
+                            tn = tangent(evn.B, e_s)
+                        ptn.tangent = tn
                         jumped = True
                         ds = ds_ok
+                    else:  # not again before the branch has moved on (creeping to the corner)
+                        far_failed = (prob, z[-1])
+                    forced = False
+                last = self.unverified
+                if (not jumped and (ds < self.ds_min or (budget is not None and budget <= 0))
+                        and (near_grazing or strict) and last is not None
+                        and last[0] is prob and last[1] is pts[-1]):
+                    # every strategy failed, but a far-side solution passed the checks except
+                    # that the bisection joining it could not be finished: taken, loudly
+                    zn, evn, ptn, crossing = last[2]
+                    tn = ptn.tangent = crossing.t_far
+                    jumped = True
+                    ds = ds_ok
+                    self._warn_unverified(prob, pts[-1].p, ptn.p)
                 if not jumped:
-                    if ds < self.ds_min:
-                        reason = "step underflow"
-                        break
+                    if ds < self.ds_min or (budget is not None and budget <= 0):
+                        if not (near_grazing or strict or budget is not None):
+                            reason = "step underflow"
+                            break
+                        new = self._more_segments(prob, pts[-1])
+                        if self.debug:
+                            print("corner: segments", None if new is None else new[0].n_seg,
+                                  "evaluations so far", self.n_evaluations)
+                        if new is not None:
+                            try:
+                                z, t, z_first, t_first = self._rebase(new[0], new[1], pts,
+                                                                      direction)
+                                retrace.replace_last(pts[-1], z)
+                            except ConvergenceError:
+                                new = None
+                        if new is None:
+                            reason = "stuck at a corner"
+                            self._warn_stuck(prob, pts[-1].p)
+                            break
+                        prob = new[0]
+                        w, wp = prob.scale_u, prob.scale_p
+                        t_in = t.copy()
+                        ds = min(ds_ok, self.grazing_ds)
+                        n_fail, tried_jump, guesses = 0, False, []
+                        forced, budget = True, 8  # far-side solves first, then a few steps
                     continue
             tried_jump = near_grazing = False
             angle_rej = np.inf
+            guesses = []
+            self.unverified = None
             if not jumped:
                 ds_ok = ds
             n_fail = 0
             if not jumped:
                 self._creeps = 0
-            pt = ptn
+            pt = self._state0(prob, ptn)
+            pt.how = "jump" if jumped else ("corner" if crossing is not None else "step")
+            if crossing is not None:
+                budget = None  # the corner is passed
             tf = self._tests(pt)
             prev = pts[-1]
             grazing = None
-            if pt.n_impacts != prev.n_impacts:
-                grazing = self.locate_grazing(prob, z, t, ds, prev, pt, jumped)
-                located.append(Located("grazing", grazing[0], grazing[1], len(pts) - 1))
+            if crossing is not None:
+                located.append(Located("grazing", crossing.hi, crossing.width, len(pts) - 1))
+                # the bracket of the grazing point for the bifurcations on the step: where the
+                # branch turns back at the corner, the turning point lies within the chord
+                # between the bracket's ends, not between their parameters
+                g_tol = crossing.width
+                if crossing.turn:
+                    g_tol = max(g_tol, crossing.gap * prob.scale_p
+                                * max(abs(t_in[-1]), abs(crossing.t_far[-1])))
+                grazing = (crossing.hi, g_tol, crossing.lo, None)
             if stop is not None and stop(pt):
                 pts.append(pt)
                 tfs.append(tf)
                 reason = "stop"
                 break
             if self.detect:
-                located += self._detect_step(prob, z, t, ds, prev, pt, tfs[-1], tf, jumped,
-                                             grazing, len(pts) - 1)
+                found = self._detect_step(prob, z, t, ds, prev, pt, tfs[-1], tf, jumped,
+                                          grazing, len(pts) - 1)
+                if crossing is not None and crossing.turn:
+                    # a fold at the corner is reported at the bracket's end further in the
+                    # direction of travel (nearer the turning point: both lie on one side of it);
+                    # where the fold's test function did not tell (a multiplier too near +1),
+                    # the turn is a fold all the same
+                    ext = max((crossing.lo, crossing.hi), key=lambda q: q.p * np.sign(t_in[-1]))
+                    folds = [L for L in found if L.kind == "fold" and L.point is crossing.hi]
+                    for L in folds:
+                        L.point = ext
+                    if not any(L.kind == "fold" for L in found):
+                        found.append(Located("fold", ext, g_tol, len(pts) - 1,
+                                             note=_jump_note("fold", prev, pt)))
+                located += found
             steps.append(float(np.linalg.norm(zn - z)))
             pts.append(pt)
             tfs.append(tf)
+            retrace.add(pt, zn, steps[-1])
             z, t = zn, tn
+            t_in = t.copy()
+            hit = retrace.check()
+            if hit is not None:
+                kind, i = hit
+                if kind == "closed" or (kind == "same" and (i <= 1 or pt.how == "step")):
+                    reason = "closed (isola)"
+                    break
+                # a retrace: what followed the first corner or jump since segment i is dropped
+                # and that corner passed again by checked far-side solves, avoiding it
+                lo_j = i + 1 if i >= 0 else 0
+                j = next((q for q in range(lo_j, len(pts) - 1)
+                          if pts[q + 1].how in ("corner", "jump")), len(pts) - 2)
+                rolled[j] = rolled.get(j, 0) + 1
+                n_ret = pts[i].n_impacts if i >= 0 else pt.n_impacts
+                for q in pts[j + 1:]:
+                    if q.n_impacts == n_ret:
+                        avoid.append((q.problem, np.r_[q.u / q.problem.scale_u,
+                                                       q.p / q.problem.scale_p]))
+                del pts[j + 1:], tfs[j + 1:], steps[j:]
+                retrace.truncate(j + 1)
+                located = [L for L in located if L.index < j]
+                if rolled[j] > 2:
+                    reason = "stuck at a corner"
+                    self._warn_stuck(prob, pts[-1].p)
+                    break
+                if pts[-1].problem is not prob:
+                    prob = pts[-1].problem
+                    z_first, t_first = _firsts(prob, pts)
+                w, wp = prob.scale_u, prob.scale_p
+                z = np.r_[pts[-1].u / w, pts[-1].p / wp]
+                avoid_until = len(pts) + 10
+                t = pts[-1].tangent if pts[-1].tangent is not None else t
+                t_in = t.copy()
+                forced = True
+                ds = min(ds_ok, self.grazing_ds)
+                n_fail, tried_jump, guesses = 0, False, []
+                continue
             if not (self.p_min <= pt.p <= self.p_max):
                 reason = "left the parameter range"
                 break
             if len(pts) > 8 and _passes(z_first, t_first, pts[-2], z, prob):
-                reason = "closed"
+                reason = "closed (isola)"
                 break
             if (len(steps) >= self.progress_points
                     and sum(steps[-self.progress_points:]) < self.progress_min):
@@ -435,32 +691,25 @@ class Tracer:
                 break
             if not jumped:
                 fac = 0.5 * self.max_angle / max(angle, 1e-12)
-                if iters >= 6:
-                    fac = min(fac, 0.7)
+                if iters >= 6 and ds > 0.1 * self.grazing_ds:
+                    fac = min(fac, 0.7)  # (for shorter steps many iterations are the map's
+                    # noise, where contacts nearly stick, not the branch's curvature)
                 ds = min(self.ds_max, ds * min(2.0, max(0.5, fac)))
+            if crossing is not None:  # past the corner the branch is smooth again: not the
+                # tiny steps that approached it (they would trip the no-progress rule)
+                ds = max(ds, 0.1 * self.grazing_ds)
             new = prob.adapt(pt.u, pt.p)
             if new is not None:
-                prob2, u2 = new
                 try:
-                    u2, ev2, _, _ = prob2.solve(u2, pt.p, tol=self.tol)
+                    z, t, z_first, t_first = self._rebase(new[0], new[1], pts, direction)
+                    retrace.replace_last(pts[-1], z)
                 except ConvergenceError:
                     reason = "could not move the segment boundaries"
                     break
-                w, wp = prob2.scale_u, prob2.scale_p
-                z_prev_new = np.r_[prob2.transfer(pts[-2].problem, pts[-2].u, pts[-2].p) / w,
-                                   pts[-2].p / wp]
-                z = np.r_[u2 / w, pt.p / wp]
-                ev2 = prob2.evaluate(u2, pt.p, jac=True, jac_p=True)
-                sec = z - z_prev_new
-                t = sec / np.linalg.norm(sec)
-                pts[-1] = self._point(prob2, z, ev2, t)
-                z1 = np.r_[prob2.transfer(pts[1].problem, pts[1].u, pts[1].p) / w,
-                           pts[1].p / wp] if len(pts) > 1 else None
-                z_first = np.r_[prob2.transfer(pts[0].problem, pts[0].u, pts[0].p) / w,
-                                pts[0].p / wp]
-                if z1 is not None:
-                    t_first = (z1 - z_first) / np.linalg.norm(z1 - z_first)
-                prob = prob2
+                prob = new[0]
+                w, wp = prob.scale_u, prob.scale_p
+                t_in = t.copy()
+        self.retrace = retrace
         return pts, located, reason
 
     # --- bifurcations on a step ---------------------------------------------------------------
@@ -544,104 +793,6 @@ class Tracer:
             return None
         return self.locate(prob, za, d / L, L, k, g_a, g_b, pa.corr, p_a=pa.p,
                            n_impacts=pa.n_impacts)
-
-    # --- past a non-smooth point ----------------------------------------------------------------
-    def jump(self, prob, pt, t):
-        """Continue past a point where the corrector fails (typically a grazing orbit, where the
-        flow map is not differentiable): (1) solve at fixed parameter a little beyond, in the
-        direction of travel, from the linear predictor, taking the first solution close to the
-        last one with a different number of impacts; (2) else integrate from the last orbit a
-        little beyond until it settles (``problem.settle``) and shoot from there; (3) else take
-        the furthest fixed-parameter solution found in (1). Returns (zeta, evaluation,
-        tangent) or None."""
-        w, wp = prob.scale_u, prob.scale_p
-        z = np.r_[pt.u / w, pt.p / wp]
-        sp = 1.0 if t[-1] >= 0 else -1.0
-        e_p = np.zeros(len(z))
-        e_p[-1] = sp
-        same = None
-
-        def solve_at(u, p):
-            """The quasi-Newton corrector at fixed p (the bordering row fixes p)."""
-            zs, evs, _ = self.correct(prob, np.r_[u / w, p / wp], e_p, pt.corr, fixed_p=True)
-            return zs, evs
-
-        def accept(zs, evs):
-            self.complete_jacobian(prob, evs)
-            return zs, evs, tangent(evs.B, e_p)
-
-        for rel in self.jump_steps:
-            dp = sp * rel
-            guesses = [z[:-1] + t[:-1] / t[-1] * dp, z[:-1]] if abs(t[-1]) > 1e-3 else [z[:-1]]
-            for g in guesses:
-                try:
-                    zs, evs = solve_at(g * w, (z[-1] + dp) * wp)
-                except ConvergenceError:
-                    continue
-                if np.max(np.abs(zs[:-1] - z[:-1])) > self.jump_max_distance:
-                    continue  # another branch
-                if evs.n_impacts != pt.n_impacts:
-                    return accept(zs, evs)
-                same = (zs, evs)
-                break
-        p_new = (z[-1] + sp * self.jump_steps[-1]) * wp
-        try:
-            u = prob.settle(pt.u, pt.p, p_new, efolds=4.0)
-            zs, evs = solve_at(u, p_new)
-            if (evs.n_impacts != pt.n_impacts
-                    and abs(evs.xmax - pt.xmax) < 0.1 * abs(pt.xmax)
-                    and np.max(np.abs(zs[:-1] - z[:-1])) < 10 * self.jump_max_distance):
-                return accept(zs, evs)
-        except ConvergenceError:
-            pass
-        if same is not None and self._creeps < 3:
-            self._creeps += 1
-            return accept(*same)
-        return None
-
-    def locate_grazing(self, prob, z_a, t_a, ds, pa, pb, jumped):
-        """Bracket the point between pa and pb where the number of impacts per period changes,
-        by bisection (on the arclength step, or in the parameter after a jump). Returns
-        (Point on the side of pb nearest the grazing point, width of the bracket in p,
-        Point on the side of pa nearest it (pa if none), (arclength of the two from z_a along
-        t_a, or None after a jump))."""
-        best, lo_p, hi_p = pb, pa.p, pb.p
-        near = pa
-        if jumped:
-            w, wp = prob.scale_u, prob.scale_p
-            u_lo = pa.u
-            for _ in range(self.grazing_iter):
-                pm = 0.5 * (lo_p + hi_p)
-                e_p = np.zeros(len(u_lo) + 1)
-                e_p[-1] = 1.0
-                try:
-                    zs, ev, _ = self.correct(prob, np.r_[u_lo / w, pm / wp], e_p, pa.corr,
-                                             fixed_p=True)
-                except ConvergenceError:
-                    hi_p = pm  # no solution continuing the near side: beyond the grazing point
-                    continue
-                u = zs[:-1] * w
-                q = self._point(prob, zs, ev)
-                if q.n_impacts == pa.n_impacts:
-                    lo_p, u_lo, near = pm, u, q
-                else:
-                    hi_p, best = pm, q
-            return best, abs(best.p - lo_p), near, None  # the reported point to the near side
-        lo, hi = 0.0, ds
-        for _ in range(self.grazing_iter):
-            s = 0.5 * (lo + hi)
-            try:
-                zs, evs, _ = self.correct(prob, z_a + s * t_a, t_a, pa.corr)
-            except ConvergenceError:
-                break
-            q = self._point(prob, zs, evs, t_a)
-            if q.n_impacts == pa.n_impacts:
-                lo, lo_p, near = s, q.p, q
-            else:
-                hi, hi_p, best = s, q.p, q
-            if abs(hi_p - lo_p) <= self.bif_tol * abs(hi_p) * 10:
-                break
-        return best, abs(best.p - lo_p), near, (lo, hi)
 
     # --- bifurcation location -----------------------------------------------------------------
     def locate_p(self, prob, pa, pb, k, g_a, g_b):
@@ -819,6 +970,28 @@ def _jump_note(kind, a, b):
         return "at grazing: the branch turns back at a corner (non-smooth)"
     return (f"at grazing: multiplier jumps from {_fmt_mu(_critical(a.multipliers, kind))} to "
             f"{_fmt_mu(_critical(b.multipliers, kind))} (non-smooth)")
+
+
+def _near_any(prob, zn, z, avoid):
+    """zn (scaled) lies near one of the avoided states of prob: closer than a tenth of that
+    state's distance from z."""
+    return any(q is prob and np.max(np.abs(zn - v)) < 0.1 * max(np.max(np.abs(v - z)), 1e-9)
+               for q, v in avoid)
+
+
+def _firsts(prob, pts):
+    """(z_first, t_first): the branch's first point and first direction in prob's unknowns."""
+    w, wp = prob.scale_u, prob.scale_p
+
+    def zz(q):
+        u = q.u if q.problem is prob else prob.transfer(q.problem, q.u, q.p)
+        return np.r_[u / w, q.p / wp]
+
+    z0 = zz(pts[0])
+    if len(pts) < 2:
+        return z0, pts[0].tangent
+    d = zz(pts[1]) - z0
+    return z0, d / np.linalg.norm(d)
 
 
 def _has_pair_near_circle(mu_a, mu_b):

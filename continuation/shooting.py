@@ -459,6 +459,14 @@ class ShootingProblem(Problem):
                               steps_per_period=self.steps_per_period, variational=False)
         return self.transfer(tmp, s, p_new)
 
+    def with_segments(self, u, p, n_seg):
+        """(problem, u): the orbit u at p with n_seg shooting segments (Problem protocol)."""
+        return self.rephased(u, p, n_seg=n_seg)
+
+    def signature(self, u, p):
+        """The state at excitation phase zero of the orbit u (Problem protocol)."""
+        return self.state_at_zero(u, p)[0]
+
     def needs_rephase(self, u, p):
         if self.sel_clearance is None:
             return False

@@ -43,7 +43,7 @@ class Circle(Problem):
 def test_tracer_follows_a_closed_form_branch_through_its_folds():
     tracer = Tracer(p_min=-2.0, p_max=2.0, ds=0.05, ds_max=0.1, bif_tol=1e-9)
     pts, located, reason = tracer.trace(Circle(), np.array([1.0]), 0.0, direction=1)
-    assert reason == "closed"
+    assert reason == "closed (isola)"
     u = np.array([q.u[0] for q in pts])
     p = np.array([q.p for q in pts])
     assert np.max(np.abs(u ** 2 + p ** 2 - 1.0)) < 1e-9  # every point on the circle

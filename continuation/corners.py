@@ -1,0 +1,395 @@
+"""Corners of a branch: where the number of impacts per period changes (a grazing orbit).
+
+The flow map is not smooth there, and a branch may pass straight through the corner or turn
+back at it (a non-smooth fold). Which of the two happens is not free: along a branch of a
+continuous map the sign of det(dR/du) times the sign of dp/ds does not change (the local degree
+of the solution set), and for a periodic orbit det(dR/du) has the sign of prod(mu - 1) (mu the
+Floquet multipliers). So the parameter turns back at a corner exactly when an odd number of
+real multipliers passes +1 there: a genuine (non-smooth) fold. A turn without that, or a
+crossing that lands on another orbit close by, is a failed corner, and the tracer must not
+accept it (see ``Tracer.trace``).
+
+This module holds the checks: ``fold_sign`` (the sign of prod(mu - 1) and whether it can be
+trusted), ``check_crossing`` (is a point on the far side really the continuation of the
+branch: the two are joined through the grazing point, and the turn agrees with the fold
+sign), ``far_side`` (fixed-parameter solves on both sides of the corner, each checked), and
+``Retrace`` (a point that re-enters a stretch the branch has already traced).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._newton import ConvergenceError
+
+
+def tangent(J, t_prev):
+    """Unit null vector of J (n, n+1) with a positive projection on t_prev."""
+    A = np.vstack([J, t_prev[None, :]])
+    b = np.zeros(A.shape[0])
+    b[-1] = 1.0
+    t = np.linalg.solve(A, b)
+    return t / np.linalg.norm(t)
+
+
+def fold_sign(pt, margin):
+    """(sign of prod(mu - 1), reliable) of a branch point: from its multipliers, or without
+    them from det(dR/du) of its Jacobian (the same sign up to a factor fixed by the problem's
+    shape). Not reliable where a real multiplier lies within ``margin`` of +1 (its error may
+    flip the sign) or nothing is known."""
+    mu = pt.multipliers
+    if mu is not None:
+        tf = float(np.prod(mu - 1.0).real)
+        real = mu.real[np.abs(mu.imag) <= 1e-9 * np.maximum(1.0, np.abs(mu))]
+        return np.sign(tf), bool(tf != 0.0 and not np.any(np.abs(real - 1.0) < margin))
+    if pt.jac is not None:
+        n = pt.jac.shape[0]
+        s, _ = np.linalg.slogdet(pt.jac[:, :n])
+        return float(s), bool(s != 0.0)
+    return 0.0, False
+
+
+@dataclass
+class Crossing:
+    """A checked passage through a corner. lo / hi: the points nearest the grazing point on
+    the near and the far side (z_lo, z_hi scaled); width: |hi.p - lo.p|; gap: |z_hi - z_lo|
+    (scaled: where the parameter turns back at the corner, the turning point lies within
+    gap * scale_p of both, though not between them); t_far: the unit
+    tangent (scaled) at the far point b, pointing away from the corner; turn: the parameter
+    turns back between a and b (a non-smooth fold); connected: True when a bisection of the chord
+    joined the two sides, None when it could not be run to the end."""
+
+    lo: object
+    hi: object
+    z_lo: np.ndarray
+    z_hi: np.ndarray
+    width: float
+    gap: float
+    t_far: np.ndarray
+    turn: bool
+    connected: bool | None
+
+
+def _oriented(pt, ref):
+    if pt.jac is None:
+        return ref / np.linalg.norm(ref)
+    try:
+        return tangent(pt.jac, ref)
+    except np.linalg.LinAlgError:
+        return ref / np.linalg.norm(ref)
+
+
+def check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict):
+    """Is b (another number of impacts than a) the continuation of the branch through a (z_a,
+    direction of travel t_a) across a grazing point? The chord from a to b is bisected (the
+    corrector on the hyperplane normal to the chord through its midpoint, each solution
+    replacing the end with its number of impacts): on one branch the two sides close in on the
+    grazing point, from two different orbits they do not (connected: the chord is below 0.3 of
+    the first after two or more bisections; where the chord's corrector fails, the corrector
+    at the midpoint's parameter is tried). Then the travel direction on the far side
+    (away from the grazing point) and the fold signs at a and b must agree (``fold_sign``):
+    the parameter turns back if and only if the sign of prod(mu - 1) changes, unless that sign
+    or the direction is too uncertain to tell; and where it does not turn back, b must not lie
+    behind a in the parameter. strict: the bisection must have joined the sides
+    (else an unfinished bisection is accepted). b is judged after three bisections; only an
+    accepted b is bracketed on (``tr.grazing_iter`` bisections in all). Returns a Crossing,
+    or None."""
+    lo, z_lo, hi, z_hi = a, z_a, b, z_b
+    L0 = float(np.linalg.norm(z_b - z_a))
+    e_p = np.zeros(len(z_a))
+    e_p[-1] = 1.0
+    t_near = _oriented(a, t_a)
+    s_a, ok_a = fold_sign(a, tr.fold_margin)
+    s_b, ok_b = fold_sign(b, tr.fold_margin)
+    done = 0
+    judged = False
+    while True:
+        stop = done >= tr.grazing_iter
+        if not stop:
+            d = z_hi - z_lo
+            L = float(np.linalg.norm(d))
+            # (the chord's length, not the bracket's width in p: where the branch turns back at
+            # the corner the two sides lie at nearly one p, yet far apart)
+            stop = L <= 10 * tr.bif_tol * max(1.0, float(np.linalg.norm(z_a)))
+        if not stop:
+            m = z_lo + 0.5 * d
+            try:
+                zs, evs, _ = tr.correct(prob, m, d / L, a.corr)
+            except ConvergenceError:
+                # where the map is too rough for the chord's corrector, the corrector at the
+                # midpoint's parameter (the chord's plane turned to p = const), kept if it
+                # lands near the chord
+                try:
+                    zs, evs, _ = tr.correct(prob, m, e_p, a.corr, fixed_p=True)
+                    tr.complete_jacobian(prob, evs)
+                    stop = bool(np.linalg.norm(zs - m) > 0.5 * L)
+                except ConvergenceError:
+                    stop = True
+        if not stop:
+            q = tr._point(prob, zs, evs)
+            done += 1
+            if q.n_impacts == a.n_impacts:
+                lo, z_lo = q, zs
+            else:
+                hi, z_hi = q, zs
+        if judged or not (stop or done == 3):
+            if stop:
+                break
+            continue
+        # judged once, after three bisections (or fewer, if they stopped): a rejected b costs
+        # no further bisections; an accepted one is bracketed on to grazing_iter
+        judged = True
+        gap = float(np.linalg.norm(z_hi - z_lo))
+        connected = (gap <= 0.3 * L0) if done >= 2 else (True if gap <= 1e-9 else None)
+        if connected is False or (strict and not connected):
+            return None
+        # directions and fold signs at a and at b, b's oriented away from the corner (the
+        # chord from lo, the near side's point nearest it); close to the corner the tangents
+        # are uncertain (the near side may meet it tangentially in p); a smooth fold between
+        # a and the corner or between the corner and b flips both the direction and the sign
+        t_far = _oriented(b, z_b - z_lo)
+        turn = bool(t_near[-1] * t_far[-1] < 0)
+        sure = ok_a and ok_b and min(abs(t_near[-1]), abs(t_far[-1])) > tr.turn_tol
+        if sure and turn != (s_a != s_b):
+            return None  # a turn with no multiplier through +1 (or the reverse)
+        if not turn and (z_b[-1] - z_a[-1]) * t_near[-1] < -1e-12 * max(1.0, abs(z_a[-1])):
+            return None  # straight through, yet b lies behind a: the parameter went back and
+            # forth, which only two folds could explain: not this branch
+        if stop:
+            break
+    gap = float(np.linalg.norm(z_hi - z_lo))
+    return Crossing(lo, hi, z_lo, z_hi, abs(hi.p - lo.p), gap, t_far, turn, connected)
+
+
+def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
+    """Solutions at fixed parameter on the far side of a corner ahead of the branch point a
+    (z_a scaled, direction of travel t_in), each checked by ``check_crossing`` (strict): first
+    beyond the corner in the direction of travel (the branch passes through it), at relative
+    distances ``tr.jump_steps`` (of a's parameter), from the linear predictor and from a's own
+    state; then the attractor reached by integrating beyond (``prob.settle``, frequency only;
+    not where a's side goes on at the largest distance); then behind it
+    (the branch turns back at a non-smooth fold: the far side lies on the near side's
+    parameter side), from the latest far-side state the failed steps saw (``guesses``,
+    scaled), unless the solves beyond found a's side going on (the corner lies further: the
+    branch creeps towards it first, three times in a row at most, unless a's side went on as
+    far as the largest distance). Solutions near ``avoid`` (scaled states of a rolled-back
+    retrace) are skipped; the first one whose check was consistent but whose bisection could
+    not be finished is kept in ``tr.unverified`` (the tracer's last resort). Returns (z,
+    evaluation, Point, Crossing), or (z, evaluation, Point, None) for a solution with a's
+    number of impacts a little further in the direction of travel on a's stretch
+    (``joined``: a creep towards the corner, at most three in a row), or None."""
+    w, wp = prob.scale_u, prob.scale_p
+    sp = 1.0 if t_in[-1] >= 0 else -1.0
+    e_p = np.zeros(len(z_a))
+    e_p[-1] = 1.0
+    same = None
+
+    def solve_at(u_scaled, p_scaled):
+        zs, evs, _ = tr.correct(prob, np.r_[u_scaled, p_scaled], e_p, a.corr, fixed_p=True)
+        return zs, evs
+
+    def candidate(zs, evs):
+        if np.max(np.abs(zs[:-1] - z_a[:-1])) > tr.jump_max_distance:
+            return None  # another orbit
+        if any(np.max(np.abs(zs - v)) < 0.1 * max(np.max(np.abs(v - z_a)), 1e-9)
+               for v in avoid):
+            return None
+        tr.complete_jacobian(prob, evs)
+        b = tr._point(prob, zs, evs)
+        cr = check_crossing(tr, prob, a, z_a, t_in, b, zs, strict=False)
+        if cr is not None and cr.connected is None:  # consistent, but the bisection could
+            # not be finished (a rough map): kept as the last resort (Tracer.trace)
+            if tr.unverified is None:
+                tr.unverified = (prob, a, (zs, evs, b, cr))
+            return None
+        return None if cr is None else (zs, evs, b, cr)
+
+    far = [g[:-1] for g in guesses]
+    same_rel = 0.0  # the furthest relative distance beyond a where a's side goes on
+    unit = max(abs(z_a[-1]), 1e-3)  # the distances are relative to a's parameter (scaled)
+    for rel in tr.jump_steps:
+        dp = sp * rel * unit
+        first = [z_a[:-1] + t_in[:-1] / t_in[-1] * dp] if abs(t_in[-1]) > 1e-3 else []
+        for g in first + [z_a[:-1]]:
+            try:
+                zs, evs = solve_at(g, z_a[-1] + dp)
+            except ConvergenceError:
+                continue
+            if evs.n_impacts == a.n_impacts:
+                if np.max(np.abs(zs[:-1] - z_a[:-1])) <= tr.jump_max_distance:
+                    same = (zs, evs)  # the corner lies further: the furthest one is kept
+                    same_rel = rel
+                    break
+                continue
+            res = candidate(zs, evs)
+            if res is not None:
+                return res
+    p_new = (z_a[-1] + sp * tr.jump_steps[-1] * unit) * wp
+    try:  # (a problem without settle raises ConvergenceError: Problem's default)
+        if same_rel >= tr.jump_steps[-1]:  # a's side goes on there: the corner is further
+            raise ConvergenceError("settle: not needed")
+        u = prob.settle(a.u, a.p, p_new, efolds=4.0)
+        zs, evs = solve_at(u / w, p_new / wp)
+        if evs.n_impacts != a.n_impacts and abs(evs.xmax - a.xmax) < 0.1 * abs(a.xmax):
+            res = candidate(zs, evs)
+            if res is not None:
+                return res
+    except ConvergenceError:
+        pass
+    behind = same is None or (tr._creeps >= 3 and same_rel < tr.jump_steps[-1])
+    for rel in tr.jump_steps if behind else ():  # else a's side goes on beyond: creep on
+        # towards the corner first
+        for g in far[-1:]:
+            try:
+                zs, evs = solve_at(g, z_a[-1] - sp * rel * unit)
+            except ConvergenceError:
+                continue
+            if evs.n_impacts != a.n_impacts:
+                res = candidate(zs, evs)
+                if res is not None:
+                    return res
+    if same is not None and tr._creeps < 3 and joined(tr, prob, a, z_a, same[0]):
+        tr._creeps += 1
+        zs, evs = same
+        tr.complete_jacobian(prob, evs)
+        return zs, evs, tr._point(prob, zs, evs), None
+    return None
+
+
+def joined(tr, prob, a, z_a, z_b):
+    """Do a and the solution z_b (scaled; a's number of impacts) lie on one smooth stretch of
+    a branch? The corrector on the hyperplane normal to the chord through its midpoint must
+    land near the chord (within a quarter of its length) with the same number of impacts; on
+    two different orbits close by it lands on one of them, half a chord away, or fails."""
+    d = z_b - z_a
+    L = float(np.linalg.norm(d))
+    if L == 0.0:
+        return True
+    m = z_a + 0.5 * d
+    try:
+        zs, evs, _ = tr.correct(prob, m, d / L, a.corr)
+    except ConvergenceError:
+        return False
+    return evs.n_impacts == a.n_impacts and float(np.linalg.norm(zs - m)) <= 0.25 * L
+
+
+class Retrace:
+    """Finds a branch point that lies on a stretch the branch has already traced.
+
+    A new point re-enters segment i when it lies within ``tol`` times the longer of that
+    segment and the new step from it, inside it, with the same number of impacts at both ends,
+    its step running along the segment (|cos| > 0.5). Points are compared in the scaled
+    unknowns (z) where the new step and the segment lie in one problem (smooth along the
+    branch), else by their signatures (``Point.state0``: ``Problem.signature``, for shooting
+    the state at excitation phase zero, scaled by the first point's scales, with p), which do
+    not depend on how the unknowns are defined but may jump where a contact crosses phase
+    zero: a segment or step whose signature moved more than ``jump`` times its length in z is
+    not compared. prior: ``export()`` of the other half of the branch, traced before from the
+    same first point (its segments in their own direction of travel)."""
+
+    def __init__(self, tol, scale, scale_p, prior=None, jump=5.0):
+        self.tol = tol
+        self.jump = jump
+        self.scale = np.asarray(scale, dtype=float)
+        self.scale_p = float(scale_p)
+        self.rows = []  # signatures
+        self.zs = []  # (problem, scaled unknowns)
+        self.n = []
+        self.dz = []  # length in z of the step that reached each point (0: the first)
+        self.prior = prior
+
+    def signature(self, pt):
+        s = pt.state0 if pt.state0 is not None else pt.u
+        m = min(len(s), len(self.scale))
+        return np.r_[np.asarray(s[:m]) / self.scale[:m], pt.p / self.scale_p]
+
+    def add(self, pt, z, dz):
+        """Record the point pt (z: its scaled unknowns in pt.problem; dz: the length of the
+        step that reached it, in z)."""
+        self.rows.append(self.signature(pt))
+        self.zs.append((pt.problem, np.asarray(z, dtype=float)))
+        self.n.append(pt.n_impacts)
+        self.dz.append(float(dz))
+
+    def replace_last(self, pt, z):
+        """The last point moved into another problem (the same orbit, other unknowns)."""
+        self.rows[-1] = self.signature(pt)
+        self.zs[-1] = (pt.problem, np.asarray(z, dtype=float))
+
+    def truncate(self, k):
+        del self.rows[k:], self.zs[k:], self.n[k:], self.dz[k:]
+
+    def export(self):
+        return np.array(self.rows), np.array(self.n), np.array(self.dz)
+
+    def _hits(self, A, B, nA, nB, x, dn, n_new):
+        Ln = float(np.linalg.norm(dn))
+        d = B - A
+        L = np.linalg.norm(d, axis=1)
+        safe = np.where(L > 0, L, 1.0)
+        lam = np.einsum("ij,ij->i", x - A, d) / safe ** 2
+        dist = np.linalg.norm(A + np.clip(lam, 0, 1)[:, None] * d - x, axis=1)
+        cos = (d @ dn) / (safe * Ln)
+        near = ((L > 0) & (lam >= 0) & (lam <= 1) & (dist <= self.tol * np.maximum(L, Ln))
+                & (nA == n_new) & (nB == n_new))
+        return near & (cos < -0.5), near & (cos > 0.5)
+
+    def _smooth(self, S, dz):
+        """Segments of the signature rows S whose signature moved at most ``jump`` times
+        their length in z (dz: of the step to each row)."""
+        L = np.linalg.norm(np.diff(S, axis=0), axis=1)
+        return (dz[1:] > 0) & (L <= self.jump * dz[1:])
+
+    def check(self):
+        """None, or ('retrace', i): the newest point runs back along segment i of this half;
+        ('same', i): it runs along segment i (i <= k - 4) in the same direction (the branch
+        closed, or jumped onto itself); ('closed', -1): it runs back along the other half
+        (the branch is a loop); ('retrace', -1): it runs forward along the other half."""
+        k = len(self.rows) - 1
+        if k < 2:
+            return None
+        X = np.array(self.rows)
+        n = np.array(self.n)
+        dz = np.array(self.dz)
+        prob, z = self.zs[-1]
+        dn_s = X[-1] - X[-2]
+        sig_ok = bool(dz[-1] > 0 and 0 < np.linalg.norm(dn_s) <= self.jump * dz[-1])
+        back = np.zeros(k - 1, dtype=bool)
+        fwd = np.zeros(k - 1, dtype=bool)
+        handled = np.zeros(k - 1, dtype=bool)
+        # the branch's last points in the new point's problem (a problem, once left, is not
+        # taken up again, except by a rollback to it): their segments in its scaled unknowns
+        s0 = k
+        while s0 > 0 and self.zs[s0 - 1][0] is prob:
+            s0 -= 1
+        if k - 1 - s0 >= 1:
+            Z = np.array([zz for _, zz in self.zs[s0:]])
+            idx = np.arange(s0, k - 1)
+            dn_z = Z[-1] - Z[-2]
+            if np.linalg.norm(dn_z) > 0:
+                back[idx], fwd[idx] = self._hits(Z[:-2], Z[1:-1], n[idx], n[idx + 1], z, dn_z,
+                                                 n[-1])
+            handled[idx] = True
+        if sig_ok:  # the others by their signatures, where these are smooth
+            idx = np.nonzero(~handled & self._smooth(X[:-1], dz[:-1]))[0]
+            if idx.size:
+                b_, f_ = self._hits(X[idx], X[idx + 1], n[idx], n[idx + 1], X[-1], dn_s, n[-1])
+                back[idx] |= b_
+                fwd[idx] |= f_
+        if np.any(back):
+            return "retrace", int(np.nonzero(back)[0][-1])
+        fwd[max(0, k - 3):] = False
+        if np.any(fwd):
+            return "same", int(np.nonzero(fwd)[0][0])
+        if self.prior is not None and len(self.prior[0]) >= 2 and sig_ok:
+            P, nP, dP = self.prior
+            idx = np.nonzero(self._smooth(P, dP))[0]
+            if idx.size:
+                b_, f_ = self._hits(P[idx], P[idx + 1], nP[idx], nP[idx + 1], X[-1], dn_s,
+                                    n[-1])
+                if np.any(b_):
+                    return "closed", -1
+                if np.any(f_):
+                    return "retrace", -1
+        return None

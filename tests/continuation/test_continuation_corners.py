@@ -1,0 +1,202 @@
+"""Corners of a branch (the number of impacts changes) on synthetic problems that implement the
+tracer's protocol: a non-smooth fold is passed by turning back, a branch through a corner goes
+straight on, a closed curve ends as 'closed (isola)', and a retrace is caught (never silent)."""
+import numpy as np
+import pytest
+
+import continuation as C
+from continuation.corners import Crossing, Retrace
+from continuation.pathfollow import Problem, Tracer
+from continuation.shooting import Evaluation
+
+
+class PiecewiseLinear(Problem):
+    """R(u, p) = A_s u + b p + (0, u1^2 / 2), s = 0 where u1 < 0 and 1 where u1 >= 0 (the
+    'number of impacts'), with A_1 = A_0 + a e1^T so that R is continuous across u1 = 0.
+    Multipliers: the eigenvalues of I + dR/du / 10, so that prod(mu - 1) = det(dR/du) / 100
+    (the fold sign of a periodic orbit), none near -1. Branches: u1 = -A_s^{-1} b p on each
+    side (the quadratic term only bends them in u2)."""
+
+    def __init__(self, A0, a, b):
+        self.A = [np.asarray(A0, float), np.asarray(A0, float) + np.outer(a, [1.0, 0.0])]
+        self.b = np.asarray(b, float)
+        self.scale_u = np.ones(2)
+        self.scale_p = 1.0
+
+    def side(self, u):
+        return int(u[0] >= 0.0)
+
+    def evaluate(self, u, p, jac=True, jac_p=True):
+        s = self.side(u)
+        R = self.A[s] @ u + self.b * p + np.array([0.0, 0.5 * u[0] ** 2])
+        J = self.A[s] + np.array([[0.0, 0.0], [u[0], 0.0]])
+        return Evaluation(R, J if jac else None, self.b.copy() if jac_p else None,
+                          [np.eye(2) + 0.1 * J] if jac else [], abs(u[0]), s)
+
+    def jacobian_p(self, u, p, ev=None):
+        return self.b.copy()
+
+    def multipliers(self, Ms):
+        mu = np.linalg.eigvals(Ms[0])
+        return mu[np.argsort(-np.abs(mu), kind="stable")]
+
+    def adapt(self, u, p):
+        return None
+
+    def on_branch(self, u, p):
+        return float(np.max(np.abs(self.evaluate(u, p, jac=False, jac_p=False).R)))
+
+
+# non-smooth folds at p = 0: side 0 has u1 = -p, side 1 has u1 = k p, so both exist for p > 0
+# only; det(A_0) = 1 > 0 and det(A_1) = -1 / k < 0 (a multiplier passes +1). The branch arrives
+# along side 0 with p falling and leaves along side 1 with p rising. k = 3: side 1 lies ahead
+# of the incoming direction (at 63 degrees): the tracer before corners were checked took a
+# trial step's secant onto it for its direction and a fixed-p step back up side 0, and traced
+# side 0 a second time (both ends 'left the parameter range', no fold, no grazing point).
+# k = 1/3: side 1 lies behind (at 117 degrees); oriented by its projection on the incoming
+# direction, its tangent points back at the corner.
+FOLDS = {"ahead": dict(A0=[[1.0, 0.0], [0.0, 1.0]], a=[-1.0 - 1.0 / 3.0, 0.5], b=[1.0, 0.0]),
+         "behind": dict(A0=[[1.0, 0.0], [0.0, 1.0]], a=[-4.0, 0.5], b=[1.0, 0.0])}
+FOLD = FOLDS["behind"]
+# the same corner passed straight: side 1 has u1 = -p / 3 for p < 0 (det(A_1) = 3 > 0)
+STRAIGHT = dict(A0=[[1.0, 0.0], [0.0, 1.0]], a=[2.0, 0.5], b=[1.0, 0.0])
+
+
+def _start(prob, p):
+    u = np.array([-p, -0.5 * p ** 2])  # side 0: u1 = -p, u2 = -u1^2 / 2
+    assert prob.on_branch(u, p) < 1e-14
+    return u
+
+
+def _turns(pts):
+    dp = np.diff([q.p for q in pts])
+    s = np.sign(dp[dp != 0])
+    return int(np.sum(s[1:] != s[:-1]))
+
+
+@pytest.mark.parametrize("where", sorted(FOLDS))
+def test_nonsmooth_fold_is_passed_by_turning_back_once(where):
+    prob = PiecewiseLinear(**FOLDS[where])
+    tr = Tracer(p_min=-1.0, p_max=1.0, ds=0.05, ds_max=0.2, max_angle=0.2)
+    pts, loc, reason = tr.trace(prob, _start(prob, 0.9), 0.9, direction=-1)
+    assert reason == "left the parameter range"
+    assert max(prob.on_branch(q.u, q.p) for q in pts) < 1e-9
+    sides = [q.n_impacts for q in pts]
+    k = sides.index(1)
+    assert sides == [0] * k + [1] * (len(pts) - k)  # each side once: no retrace
+    assert _turns(pts) == 1 and pts[-1].p > 1.0 and min(q.p for q in pts) > -1e-9
+    kinds = {L.kind: L for L in loc}
+    assert set(kinds) == {"grazing", "fold"}
+    assert abs(kinds["fold"].point.p) <= kinds["fold"].tolerance + 1e-9
+    assert abs(kinds["fold"].point.p) < 1e-4
+
+
+def test_corner_without_a_multiplier_through_one_is_passed_straight():
+    prob = PiecewiseLinear(**STRAIGHT)
+    tr = Tracer(p_min=-1.0, p_max=1.0, ds=0.05, ds_max=0.2, max_angle=0.2)
+    pts, loc, reason = tr.trace(prob, _start(prob, 0.9), 0.9, direction=-1)
+    assert reason == "left the parameter range" and pts[-1].p < -1.0
+    assert _turns(pts) == 0
+    assert [L.kind for L in loc] == ["grazing"] and abs(loc[0].point.p) < 1e-4
+
+
+def _old_orientation(monkeypatch):
+    """Make every checked crossing orient the far side as the tracer did before corners were
+    checked: by its projection on the incoming direction (here: back towards the corner)."""
+    import continuation.pathfollow as pf
+    import continuation.corners as co
+
+    real = co.check_crossing
+
+    def projected(tr, prob, a, z_a, t_a, b, z_b, strict):
+        cr = real(tr, prob, a, z_a, t_a, b, z_b, strict)
+        if cr is None:
+            return None
+        t = cr.t_far if cr.t_far @ t_a > 0 else -cr.t_far
+        return Crossing(cr.lo, cr.hi, cr.z_lo, cr.z_hi, cr.width, cr.gap, t, False,
+                        cr.connected)
+
+    monkeypatch.setattr(pf, "check_crossing", projected)
+    monkeypatch.setattr(co, "check_crossing", projected)
+
+
+def test_a_retrace_is_caught_and_never_silent(monkeypatch):
+    """With the far side oriented back towards the corner, the branch would run back along the
+    side it came from (what the tracer did before at such corners: both ends 'left the
+    parameter range', the side traced twice). The retrace detector drops those points, and
+    when the corner cannot be passed otherwise the branch ends there, loudly."""
+    _old_orientation(monkeypatch)
+    prob = PiecewiseLinear(**FOLD)
+    tr = Tracer(p_min=-1.0, p_max=1.0, ds=0.05, ds_max=0.2, max_angle=0.2)
+    with pytest.warns(C.ContinuationWarning, match=r"stuck at a corner near p = [0-9.e-]+"):
+        pts, loc, reason = tr.trace(prob, _start(prob, 0.9), 0.9, direction=-1)
+    assert reason == "stuck at a corner" and abs(pts[-1].p) < 1e-3
+    for side in (0, 1):  # no stretch of either side traced twice
+        ps = np.array([q.p for q in pts if q.n_impacts == side])
+        assert np.all(np.diff(ps) < 0)
+
+
+class Circle(Problem):
+    """R(u, p) = (u1^2 + p^2 - 1, u2 - u1 p): a smooth closed branch, u1 = cos, p = sin."""
+
+    scale_u = np.ones(2)
+    scale_p = 1.0
+
+    def evaluate(self, u, p, jac=True, jac_p=True):
+        R = np.array([u[0] ** 2 + p ** 2 - 1.0, u[1] - u[0] * p])
+        J = np.array([[2 * u[0], 0.0], [-p, 1.0]])
+        return Evaluation(R, J if jac else None, np.array([2 * p, -u[0]]) if jac_p else None,
+                          [np.eye(2) + J] if jac else [], abs(u[0]), 0)
+
+    def jacobian_p(self, u, p, ev=None):
+        return np.array([2 * p, -u[0]])
+
+    def multipliers(self, Ms):
+        return np.linalg.eigvals(Ms[0])
+
+    def adapt(self, u, p):
+        return None
+
+
+def test_closed_branch_ends_as_isola_after_one_lap():
+    prob = Circle()
+    tr = Tracer(ds=0.05, ds_max=0.2, max_angle=0.2, max_points=2000)
+    pts, loc, reason = tr.trace(prob, np.array([1.0, 0.0]), 0.0, direction=1)
+    assert reason == "closed (isola)"
+    ang = np.unwrap([np.arctan2(q.p, q.u[0]) for q in pts])
+    assert 2 * np.pi - 0.3 < ang[-1] - ang[0] < 2 * np.pi + 0.3  # one lap, not two
+    assert len([L for L in loc if L.kind == "fold"]) == 2  # p = +-1
+
+
+def test_retrace_detector_on_a_polyline():
+    """Points along a line, then back along it: the first point back on a traced segment is a
+    retrace (compared in the unknowns, and by signatures across problems); a polyline that
+    comes round to its start in its first direction is closed."""
+
+    class P:
+        def __init__(self, x, p, n=0, problem="a"):
+            self.u, self.p, self.n_impacts, self.state0 = np.array([x]), p, n, None
+            self.problem = problem
+
+    def run(det, pts):
+        out = None
+        for k, q in enumerate(pts):
+            z = np.r_[q.u, q.p]
+            dz = 0.0 if k == 0 else float(np.hypot(q.u[0] - pts[k - 1].u[0],
+                                                   q.p - pts[k - 1].p))
+            det.add(q, z, dz)
+            out = det.check()
+            if out is not None:
+                return out, k
+        return out, len(pts) - 1
+
+    line = [P(x, x) for x in (0.0, 1.0, 2.0, 3.0)]
+    assert run(Retrace(0.1, [1.0], 1.0), line + [P(2.5, 2.5)]) == (("retrace", 2), 4)
+    # another number of impacts there: another orbit
+    assert run(Retrace(0.1, [1.0], 1.0), line + [P(2.5, 2.5, n=1)]) == (None, 4)
+    # the same, with the unknowns redefined after the third point (another problem)
+    moved = line[:2] + [P(x, x, problem="b") for x in (2.0, 3.0, 2.5)]
+    assert run(Retrace(0.1, [1.0], 1.0), moved) == (("retrace", 2), 4)
+    loop = [P(np.cos(a), np.sin(a)) for a in np.linspace(0, 2 * np.pi + 0.3, 30)]
+    (kind, i), k = run(Retrace(0.1, [1.0], 1.0), loop)
+    assert kind == "same" and i == 0 and np.linspace(0, 2 * np.pi + 0.3, 30)[k] > 2 * np.pi
