@@ -29,7 +29,8 @@ def main():
 
     free = paper.replace(K_hertz=0.0)
     tf, tr = best_of(lambda: nlbeam.integrate(free, ex, 10.0, dt=2.5e-4, store_every=0))
-    print(f"RK4 free flight: {tf / tr.n_steps * 1e9:.0f} ns/step ({tr.n_steps} steps, {tr.n_rhs} rhs)")
+    print(f"RK4 free flight: {tf / tr.n_steps * 1e9:.0f} ns/step "
+          f"({tr.n_steps} steps, {tr.n_rhs} rhs)")
 
     # permanently in contact: a preloaded stop (gap -1 mm) and small oscillation
     pre = nlbeam.System([[paper.m]], [[paper.b]], [[paper.k]],
@@ -51,7 +52,8 @@ def main():
     for meth, kw in (("rk4", {}), ("rk4", {"dt": 1.25e-4, "steps_per_contact": 64}),
                      ("rk4", {"dt": 6.25e-5, "steps_per_contact": 128}), ("rk2", {}),
                      ("adaptive", {"rtol": 1e-8}), ("adaptive", {"rtol": 1e-10, "atol": 1e-16})):
-        t, tr = best_of(lambda: nlbeam.integrate(paper, ex, 1.0, method=meth, store_every=0, **kw), 3)
+        t, tr = best_of(lambda: nlbeam.integrate(paper, ex, 1.0, method=meth, store_every=0,
+                                                 **kw), 3)
         err = abs(tr.state_end[0] - ref[0]) / abs(ref[0])
         print(f"  {meth:8s} {str(kw):45s} error {err:.2e}  CPU {t * 1e3:.1f} ms")
 

@@ -38,7 +38,8 @@ def rss_mib():
 def energy(model, x, v, y, delta):
     """Stored energy (J): kinetic + beam spring + elastic Hertz energy of the stop."""
     K = model.K_hertz
-    return 0.5 * model.m * v ** 2 + 0.5 * model.k * (x - y) ** 2 + 0.4 * K * np.clip(delta, 0, None) ** 2.5
+    return (0.5 * model.m * v ** 2 + 0.5 * model.k * (x - y) ** 2
+            + 0.4 * K * np.clip(delta, 0, None) ** 2.5)
 
 
 def main(argv=None):
@@ -91,7 +92,8 @@ def main(argv=None):
             acc["mom"].update(d)
             total.update(d)
         t = t_b
-        if t >= transient and acc is not None and (abs(t - batch_end) < 1e-9 or abs(t - t_stop) < 1e-9):
+        at_end = abs(t - batch_end) < 1e-9 or abs(t - t_stop) < 1e-9
+        if t >= transient and acc is not None and at_end:
             y1, _ = tr.excitation.evaluate([t])
             E_end = float(energy(model, state[:1], state[1:2], y1, np.array([state[0] - y1[0]]))[0])
             T = acc["n"] * dt
@@ -99,9 +101,11 @@ def main(argv=None):
             pin, pdiss = acc["pin"] / acc["n"], acc["pdiss"] / acc["n"]
             dEdt = (E_end - E_start) / T
             resid = (pin - pdiss - dEdt) / pin
-            rows.append((t, mo["std"], mo["skewness"], mo["kurtosis"], pin, pdiss, dEdt, resid, rss_mib()))
-            print(f"{t:9.0f} {mo['std']:13.5e} {mo['skewness']:7.3f} {mo['kurtosis']:6.3f} {pin:10.4e} "
-                  f"{pdiss:10.4e} {dEdt:9.1e} {resid:9.2e} {acc['imp']:8d} {rows[-1][-1]:8.0f}", flush=True)
+            rows.append((t, mo["std"], mo["skewness"], mo["kurtosis"], pin, pdiss, dEdt, resid,
+                         rss_mib()))
+            print(f"{t:9.0f} {mo['std']:13.5e} {mo['skewness']:7.3f} {mo['kurtosis']:6.3f} "
+                  f"{pin:10.4e} {pdiss:10.4e} {dEdt:9.1e} {resid:9.2e} {acc['imp']:8d} "
+                  f"{rows[-1][-1]:8.0f}", flush=True)
             acc = None
             batch_end = t + args.batch
     wall = time.perf_counter() - t_wall
@@ -110,7 +114,8 @@ def main(argv=None):
     A = np.vstack([tt - tt.mean(), np.ones_like(tt)]).T
     coef, ssr, *_ = np.linalg.lstsq(A, res, rcond=None)
     n = len(tt)
-    se = np.sqrt(ssr[0] / (n - 2) / np.sum((tt - tt.mean()) ** 2)) if n > 2 and ssr.size else float("nan")
+    se = (np.sqrt(ssr[0] / (n - 2) / np.sum((tt - tt.mean()) ** 2)) if n > 2 and ssr.size
+          else float("nan"))
     mo = total.result()
     print()
     print(f"wall {wall:.0f} s for {transient + args.duration:g} simulated s "
@@ -119,9 +124,9 @@ def main(argv=None):
           f"trend {coef[0] * 1e3:.2e} +- {se * 1e3:.2e} per 1000 s")
     for j, name in ((1, "std"), (2, "skewness"), (3, "kurtosis")):
         half = n // 2
-        print(f"{name} of delta: whole {mo[name]:.5g}; batches mean {r[:, j].mean():.5g}, batch std "
-              f"{r[:, j].std(ddof=1):.3g}; first half {r[:half, j].mean():.5g}, second half "
-              f"{r[half:, j].mean():.5g}")
+        print(f"{name} of delta: whole {mo[name]:.5g}; batches mean {r[:, j].mean():.5g}, "
+              f"batch std {r[:, j].std(ddof=1):.3g}; first half {r[:half, j].mean():.5g}, "
+              f"second half {r[half:, j].mean():.5g}")
     print(f"RSS: after compile {rss0:.0f} MiB, after first batch {r[0, -1]:.0f} MiB, "
           f"after last {r[-1, -1]:.0f} MiB, max {r[:, -1].max():.0f} MiB")
 

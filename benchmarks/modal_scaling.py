@@ -179,7 +179,8 @@ def study(modes, amp_modes, refine_max=8):
     cost = [(r["n"], r["trace_cpu"] / r["points"]) for r in rows if r["n"] >= 2 and r["points"]]
     if len(cost) >= 2:
         ns, c = zip(*cost)
-        print(f"\ndiagram cost: CPU per branch point ~ N^{slope(ns, c):.2f} (N = {ns[0]}..{ns[-1]}; "
+        print(f"\ndiagram cost: CPU per branch point ~ N^{slope(ns, c):.2f} (N = "
+              f"{ns[0]}..{ns[-1]}; "
               + ", ".join(f"N = {n}: {x * 1e3:.0f} ms" for n, x in cost) + ")")
     return amp, rows
 
@@ -193,7 +194,8 @@ def records(modes, dur, method):
     for n in modes:
         mb = nlbeam.ModalBeam.paper(n_modes=n)
         noise = stochastic.BandLimitedNoise((0.0, 200.0), rms=1e-4, seed=1)
-        r, ws, cs = timed(lambda: stochastic.simulate(mb, noise, dur, 2.0, outputs=("psd", "moments"),
+        r, ws, cs = timed(lambda: stochastic.simulate(mb, noise, dur, 2.0,
+                                                      outputs=("psd", "moments"),
                                                       channels=("delta",), psd_resolution=0.25,
                                                       method=method))
         f, P = r.psd("delta")
@@ -234,7 +236,8 @@ def main(argv=None):
     ap.add_argument("--no-diagram", action="store_true", help="same as --no-study (old name)")
     a = ap.parse_args(argv)
     modes = a.modes or ([1, 2, 3, 4] if a.quick else [1, 2, 3, 4, 5, 6, 7, 8])
-    amp_modes = a.amp_modes or ([1, 2, 3, 4] if a.quick else [1, 2, 3, 4, 5, 6, 7, 8, 10, 12, 16, 20])
+    amp_modes = a.amp_modes or ([1, 2, 3, 4] if a.quick
+                                else [1, 2, 3, 4, 5, 6, 7, 8, 10, 12, 16, 20])
     rec_modes = a.record_modes or ([1, 2, 4] if a.quick else [1, 2, 4, 8])
     dur = a.duration or (100.0 if a.quick else 400.0)
     # compile outside the timings

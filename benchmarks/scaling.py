@@ -75,7 +75,8 @@ def spectral_components(out):
         t = np.arange(0.0, 1.0 + 1e-5, 1e-5)
         y, yd = ex.evaluate(t)
         w = 2 * np.pi * f
-        ydd = -(np.cos(np.outer(t, w) + ex.tab[:, 2]) @ (ex.tab[:, 1] * w * w)) if n <= 1000 else None
+        ydd = (-(np.cos(np.outer(t, w) + ex.tab[:, 2]) @ (ex.tab[:, 1] * w * w)) if n <= 1000
+               else None)
         if ydd is None:
             ydd = np.gradient(yd, t)
         tab = nlbeam.Sampled(0.0, 1e-5, y, yd, ydd, max_freq=200.0)
@@ -207,7 +208,8 @@ def main(out="benchmarks"):
     rows = []
     for fn in (contact_stiffness, dofs, spectral_components, record_length):
         rows += fn(out)
-    lines = ["| what varies | values | wall time (s) | fitted slope | case |", "|---|---|---|---|---|"]
+    lines = ["| what varies | values | wall time (s) | fitted slope | case |",
+             "|---|---|---|---|---|"]
     for name, x, y, case in rows:
         lines.append(f"| {name} | {', '.join(f'{v:g}' for v in x)} | "
                      f"{', '.join(f'{v:.3g}' for v in y)} | {fit(x, y):.2f} | {case} |")
@@ -217,8 +219,9 @@ def main(out="benchmarks"):
               f"- one right-hand-side evaluation (in contact, all element derivatives): "
               f"{t_rhs * 1e9:.0f} ns (numba loop calling the kernel's `deriv`); the run needs "
               f"{n_rhs} of them: {t_rhs * n_rhs:.4f} s",
-              f"- the run takes {t_run:.4f} s for {n_steps} steps ({t_run / n_steps * 1e9:.0f} ns per "
-              f"step): right-hand sides are {100 * t_rhs * n_rhs / t_run:.0f} % of it; the rest is "
+              f"- the run takes {t_run:.4f} s for {n_steps} steps "
+              f"({t_run / n_steps * 1e9:.0f} ns per step): right-hand sides are "
+              f"{100 * t_rhs * n_rhs / t_run:.0f} % of it; the rest is "
               "event checks, dense output and bookkeeping.",
               f"- with the variational equations (2x2 sensitivity, 1 DOF): "
               f"{pr['rhs'][True] * 1e9:.0f} ns per right-hand side "

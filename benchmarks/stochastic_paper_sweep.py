@@ -75,21 +75,25 @@ def main():
     # compile once in this process before forking the pool
     st.simulate(nlbeam.BeamImpact.paper(), st.BandLimitedNoise(BAND, rms=1e-4, seed=1), 0.2,
                 transient=0.0)
-    jobs = [(lvl * 1e-3, False, a.duration, a.seed, a.psd_resolution, a.steps_per_contact) for lvl in LEVELS_MM]
+    jobs = [(lvl * 1e-3, False, a.duration, a.seed, a.psd_resolution, a.steps_per_contact)
+            for lvl in LEVELS_MM]
     jobs.append((1e-4, True, a.duration, a.seed, a.psd_resolution, a.steps_per_contact))
-    jobs.append((1e-4, False, a.duration, a.seed + 1, a.psd_resolution, a.steps_per_contact))  # a second seed
+    # a second seed
+    jobs.append((1e-4, False, a.duration, a.seed + 1, a.psd_resolution, a.steps_per_contact))
     t = time.perf_counter()
     with ProcessPoolExecutor(max_workers=a.processes) as pool:
         rows = list(pool.map(run_level, jobs))
     wall = time.perf_counter() - t
-    print(f"# stochastic_paper_sweep: paper model (law 2, e = 0.5), flat {BAND[0]:g}-{BAND[1]:g} Hz, "
-          f"rk4 dt = {rows[0]['dt']:.3g} s, {a.steps_per_contact} steps per contact, transient 5 s + {a.duration:g} s per level, seed {a.seed}, "
+    print(f"# stochastic_paper_sweep: paper model (law 2, e = 0.5), "
+          f"flat {BAND[0]:g}-{BAND[1]:g} Hz, rk4 dt = {rows[0]['dt']:.3g} s, "
+          f"{a.steps_per_contact} steps per contact, transient 5 s + {a.duration:g} s per level, "
+          f"seed {a.seed}, "
           f"PSD resolution {a.psd_resolution} Hz")
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"{a.processes} processes, total wall {wall:.0f} s")
     print()
-    print("| rms y (mm) | skewness | kurtosis | std(delta)/rms y | mean(delta)/rms y | var share < 15 Hz "
-          "| PSD peaks (Hz) | impacts/s | sim s / wall s |")
+    print("| rms y (mm) | skewness | kurtosis | std(delta)/rms y | mean(delta)/rms y "
+          "| var share < 15 Hz | PSD peaks (Hz) | impacts/s | sim s / wall s |")
     print("|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         name = f"{r['rms_mm']:g}" + (" (linear)" if r["linear"] else "")
@@ -100,7 +104,8 @@ def main():
         peaks = ", ".join(f"{p:.1f}" for p in r["peaks"])
         print(f"| {name} | {r['skewness']:.3f} +- {r['se_skewness']:.3f} | {r['kurtosis']:.3f} +- "
               f"{r['se_kurtosis']:.3f} | {r['std_over_rms']:.4f} | {r['mean_over_rms']:+.4f} | "
-              f"{r['low_share']:.3f} | {peaks} | {r['impacts_per_s']:.1f} | {r['sim_per_wall']:.1f} |")
+              f"{r['low_share']:.3f} | {peaks} | {r['impacts_per_s']:.1f} | "
+              f"{r['sim_per_wall']:.1f} |")
     print(f"| paper | {PAPER['skewness']} | {PAPER['kurtosis']} | | | | | | |")
     msgs = {r["message"] for r in rows if r["message"] != "completed"}
     print()

@@ -28,8 +28,8 @@ def main(duration=20.0):
     wall = time.perf_counter() - t
     mo = res.moments("delta")
     print(f"simulate (paper beam, rk4, dt = {res.dt:.3g} s): {duration + 1.0:.0f} s simulated in "
-          f"{wall:.2f} s -> {(duration + 1.0) / wall:.1f} simulated s per s; {res.n_impacts} impacts, "
-          f"{res.n_chunks} chunks")
+          f"{wall:.2f} s -> {(duration + 1.0) / wall:.1f} simulated s per s; "
+          f"{res.n_impacts} impacts, {res.n_chunks} chunks")
     print(f"  delta: skewness {mo['skewness']:.3f} +- {mo['se_skewness']:.3f}, "
           f"kurtosis {mo['kurtosis']:.3f} +- {mo['se_kurtosis']:.3f} (paper: -1.02, 3.96)")
 

@@ -156,7 +156,8 @@ def nlbeam_run(model, exc, x0, T, method, **kw):
     best = math.inf
     for _ in range(3):
         t0 = time.process_time()
-        tr = nlbeam.integrate(model, exc, T, method=method, x0=x0, store_every=store, warn=False, **kw)
+        tr = nlbeam.integrate(model, exc, T, method=method, x0=x0, store_every=store, warn=False,
+                              **kw)
         best = min(best, time.process_time() - t0)
     grid_t = np.arange(0, int(round(T / GRID)) + 1) * GRID
     # fixed-step grids are t0 + j*store*dt; adaptive interpolates onto dt
@@ -247,12 +248,14 @@ def main():
                      ((5e-5, 48), (2.5e-5, 96), (1.25e-5, 192), (6.25e-6, 384))]),
             ("rk4", [dict(dt=d, steps_per_contact=spc) for d, spc in
                      ((1e-4, 16), (5e-5, 32), (2.5e-5, 64), (1.25e-5, 128), (6.25e-6, 256))]),
-            ("adaptive", [dict(rtol=r, atol=r * 1e-4) for r in (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)])):
+            ("adaptive", [dict(rtol=r, atol=r * 1e-4)
+                          for r in (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)])):
         for kw in settings:
             x, s, imp, w = nlbeam_run(model, exc, x0, T, method, **dict(kw))
             err = np.max(np.abs(x - x_ref)) / scale
             rows.append(("nlbeam", method, kw, err, w, imp))
-            print(f"nlbeam {method:8s} {str(kw):45s} err {err:.2e} cpu {w * 1e3:8.2f} ms impacts {imp}",
+            print(f"nlbeam {method:8s} {str(kw):45s} err {err:.2e} cpu {w * 1e3:8.2f} ms impacts "
+                  f"{imp}",
                   flush=True)
     for method, rtols in (("RK45", (1e-5, 1e-6, 1e-7, 1e-8, 1e-9)),
                           ("DOP853", (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)),
@@ -262,7 +265,8 @@ def main():
             x, s, imp, w = scipy_restarted(method, r, exc, par, x0, T, grid)
             err = np.max(np.abs(x - x_ref)) / scale
             rows.append(("scipy", method, {"rtol": r}, err, w, imp))
-            print(f"scipy  {method:8s} rtol {r:.0e} err {err:.2e} cpu {w * 1e3:9.1f} ms impacts {imp}",
+            print(f"scipy  {method:8s} rtol {r:.0e} err {err:.2e} cpu {w * 1e3:9.1f} ms impacts "
+                  f"{imp}",
                   flush=True)
     print(f"(total {time.perf_counter() - t0:.0f} s)")
 
@@ -274,7 +278,8 @@ def main():
             sc[r[1]][0].append(r[3])
             sc[r[1]][1].append(r[4])
     print()
-    print("| nlbeam | settings | error | CPU (ms) | best scipy at that error | scipy CPU (ms) | ratio |")
+    print("| nlbeam | settings | error | CPU (ms) | best scipy at that error | scipy CPU (ms) | "
+          "ratio |")
     print("|---|---|---|---|---|---|---|")
     for r in rows:
         if r[0] != "nlbeam":
@@ -286,7 +291,8 @@ def main():
             print(f"| {r[1]} | {kw} | {r[3]:.1e} | {r[4] * 1e3:.2f} | none reaches it | | |")
             continue
         w, m = min(cands)
-        print(f"| {r[1]} | {kw} | {r[3]:.1e} | {r[4] * 1e3:.2f} | {m} | {w * 1e3:.0f} | {w / r[4]:.0f}x |")
+        print(f"| {r[1]} | {kw} | {r[3]:.1e} | {r[4] * 1e3:.2f} | {m} | {w * 1e3:.0f} | "
+              f"{w / r[4]:.0f}x |")
 
     import matplotlib
     matplotlib.use("Agg")
@@ -310,7 +316,8 @@ def main():
 
     if not a.no_rss:
         rss_table()
-    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python "
+          f"{platform.python_version()}")
 
 
 if __name__ == "__main__":

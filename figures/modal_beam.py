@@ -81,7 +81,8 @@ def psd_map(scene, plt):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--modes", type=int, nargs="+", default=[1, 2, 4])
     ap.add_argument("--skip-scene", action="store_true", help="diagrams only")
     args = ap.parse_args(argv)
@@ -107,7 +108,8 @@ def main(argv=None):
         w = csv.DictWriter(fh, fieldnames=["n_modes", "kind", "order", "frequency_hz", "xmax_mm"])
         w.writeheader()
         w.writerows(rows)
-    print(f"wrote figures/modal_beam_frc.png, figures/table_modal_bifurcations.csv ({len(rows)} rows)")
+    print(f"wrote figures/modal_beam_frc.png, figures/table_modal_bifurcations.csv ({len(rows)} "
+          "rows)")
     if not args.skip_scene:
         from nlbeam.app.scenes import load_scene, plan, run_scene
         from nlbeam.app.scenes.run import store_result
@@ -116,7 +118,8 @@ def main(argv=None):
         for job in plan(scene, HERE):  # the scene's diagram is the N = 4 one above: reuse it
             p = job.inputs.get("periodic") or {}
             same = (job.inputs["model"].get("n_modes") == 4 and p.get("amplitude") == AMPLITUDE
-                    and tuple(p.get("f_range", ())) == F_RANGE and tuple(p.get("orders", ())) == ORDERS
+                    and tuple(p.get("f_range", ())) == F_RANGE
+                    and tuple(p.get("orders", ())) == ORDERS
                     and p.get("n_grid") == N_GRID and p.get("segments") == 1
                     and p.get("dt_scale") == 1.0 and p.get("stability", True))
             if job.kind == "periodic" and not job.cached and same and 4 in frcs:

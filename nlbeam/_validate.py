@@ -48,5 +48,6 @@ def in_range(name, value, lo, hi, lo_open=False, hi_open=False):
 
 def choice(name, value, allowed):
     if value not in allowed:
-        raise ValueError(f"{name}: must be one of {', '.join(repr(a) for a in allowed)}, got {value!r}")
+        raise ValueError(f"{name}: must be one of {', '.join(repr(a) for a in allowed)}, got "
+                         f"{value!r}")
     return value

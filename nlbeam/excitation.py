@@ -70,7 +70,8 @@ class Harmonic(Excitation):
         finite("phase", self.phase)
 
     def kernel_args(self):
-        p = np.array([float(self.amplitude), 2.0 * math.pi * float(self.frequency), float(self.phase)])
+        p = np.array([float(self.amplitude), 2.0 * math.pi * float(self.frequency),
+                      float(self.phase)])
         return HARMONIC, p, _EMPTY_TAB
 
     def describe(self):
@@ -155,7 +156,8 @@ class CosineSum(Excitation):
         a = np.atleast_1d(np.asarray(self.amplitudes, dtype=float))
         ph = np.atleast_1d(np.asarray(self.phases, dtype=float))
         if not (f.shape == a.shape == ph.shape) or f.ndim != 1 or f.size == 0:
-            raise ValueError("frequencies, amplitudes, phases: must be 1-D arrays of one length >= 1")
+            raise ValueError("frequencies, amplitudes, phases: must be 1-D arrays of one length "
+                             ">= 1")
         for name, arr in (("frequencies", f), ("amplitudes", a), ("phases", ph)):
             if not np.all(np.isfinite(arr)):
                 raise ValueError(f"{name}: must be finite")

@@ -144,7 +144,8 @@ def collisions(delta, rate, force, *, min_samples=MIN_SAMPLES):
             raise ValueError("rate, force: with delta given as a list of collisions, must be "
                              "lists of the same length")
         runs = [(_as_array(f"delta[{i}]", d), _as_array(f"rate[{i}]", r),
-                 _as_array(f"force[{i}]", f)) for i, (d, r, f) in enumerate(zip(delta, rate, force))]
+                 _as_array(f"force[{i}]", f))
+                for i, (d, r, f) in enumerate(zip(delta, rate, force))]
     else:
         runs = [(_as_array("delta", delta), _as_array("rate", rate), _as_array("force", force))]
     out = []

@@ -126,9 +126,11 @@ class ModalBeam:
     def __post_init__(self):
         positive("length", self.length, unit="m")
         if isinstance(self.n_modes, bool) or not isinstance(self.n_modes, (int, np.integer)):
-            raise ValueError(f"n_modes: must be an integer in [1, {MAX_MODES}], got {self.n_modes!r}")
+            raise ValueError(f"n_modes: must be an integer in [1, {MAX_MODES}], got "
+                             f"{self.n_modes!r}")
         if not 1 <= int(self.n_modes) <= MAX_MODES:
-            raise ValueError(f"n_modes: must be an integer in [1, {MAX_MODES}], got {self.n_modes!r}")
+            raise ValueError(f"n_modes: must be an integer in [1, {MAX_MODES}], got "
+                             f"{self.n_modes!r}")
         choice("bc", self.bc, BOUNDARY_CONDITIONS)
         L = float(self.length)
         hi_open = self.bc == "clamped-clamped"
@@ -210,7 +212,8 @@ class ModalBeam:
         xi = s / float(self.length)
         if np.any((xi < -1e-12) | (xi > 1 + 1e-12)):
             raise ValueError(f"s: positions must lie in [0, {self.length}] m")
-        out = [mode_shape(self.bc, b, xi) / math.sqrt(_quadrature(lambda x, b=b: mode_shape(self.bc, b, x) ** 2))
+        out = [mode_shape(self.bc, b, xi)
+               / math.sqrt(_quadrature(lambda x, b=b: mode_shape(self.bc, b, x) ** 2))
                for b in self.betas]
         return np.stack(out, axis=-1)
 

@@ -20,7 +20,8 @@ from . import _kernels as _k
 from ._validate import choice, finite, in_range, nonnegative, positive
 from .vocabulary import CONTACT_LAWS
 
-_LAW_CODE = {"hertz": _k.HERTZ, "lankarani-nikravesh": _k.LANKARANI, "hunt-crossley": _k.HUNT_CROSSLEY}
+_LAW_CODE = {"hertz": _k.HERTZ, "lankarani-nikravesh": _k.LANKARANI,
+             "hunt-crossley": _k.HUNT_CROSSLEY}
 
 
 # --- helpers of the contact laws (paper eqs. 3 and 6) -------------------------------------------
@@ -115,7 +116,8 @@ class Contact:
         w = self.side * _location(self.dof, n_dof)
         wy = -float(self.side) if (self.on_base and kind == "base") else 0.0
         code = _LAW_CODE[self.law] if self.K > 0 else _k.INACTIVE
-        par = [float(self.K), float(self.e or 0.0), float(self.mu or 0.0), 1.0 if self.clamp else 0.0]
+        par = [float(self.K), float(self.e or 0.0), float(self.mu or 0.0),
+               1.0 if self.clamp else 0.0]
         return code, w, wy, float(self.gap), par
 
 
@@ -373,7 +375,8 @@ class BeamImpact:
         return cls(**overrides)
 
     def replace(self, **changes):
-        kw = {k: getattr(self, k) for k in ("m", "k", "b", "K_hertz", "e", "contact", "mu", "clamp")}
+        kw = {k: getattr(self, k)
+              for k in ("m", "k", "b", "K_hertz", "e", "contact", "mu", "clamp")}
         kw.update(changes)
         return BeamImpact(**kw)
 

@@ -73,7 +73,8 @@ class WelchPSD:
             resolution = positive("resolution", resolution, unit="Hz")
             nperseg = int(round(self.fs / resolution))
         if isinstance(nperseg, bool) or not isinstance(nperseg, (int, np.integer)) or nperseg < 8:
-            raise ValueError(f"nperseg/resolution: the segment must hold >= 8 samples, got nperseg={nperseg!r} "
+            raise ValueError(f"nperseg/resolution: the segment must hold >= 8 samples, got "
+                             f"nperseg={nperseg!r} "
                              f"(resolution must be <= fs/8 = {self.fs / 8:.6g} Hz)")
         from scipy.signal import get_window
 
@@ -119,7 +120,8 @@ class WelchPSD:
 
     def _require(self):
         if self.n_segments == 0:
-            raise ValueError(f"x: fewer samples ({self.n_samples}) than one segment ({self.nperseg}); "
+            raise ValueError(f"x: fewer samples ({self.n_samples}) than one segment "
+                             f"({self.nperseg}); "
                              f"feed more data or coarsen the resolution")
 
     @property
@@ -217,7 +219,8 @@ class StreamingHistogram:
     def __init__(self, edges=None, *, bins=100, margin=0.25, on_outside="extend", max_bins=100_000,
                  batch_size=256, max_batches=512):
         if on_outside not in ("extend", "count", "raise"):
-            raise ValueError(f"on_outside: must be one of 'extend', 'count', 'raise', got {on_outside!r}")
+            raise ValueError(f"on_outside: must be one of 'extend', 'count', 'raise', got "
+                             f"{on_outside!r}")
         self.on_outside = on_outside
         self.max_bins = int(max_bins)
         if isinstance(bins, bool) or not isinstance(bins, (int, np.integer)) or bins < 1:
@@ -245,7 +248,8 @@ class StreamingHistogram:
         if edges is not None:
             e = np.asarray(edges, dtype=float)
             if e.ndim != 1 or e.size < 2 or not np.all(np.isfinite(e)) or np.any(np.diff(e) <= 0):
-                raise ValueError("edges: must be a finite, strictly increasing 1-D array of length >= 2")
+                raise ValueError("edges: must be a finite, strictly increasing 1-D array of "
+                                 "length >= 2")
             self._set(e.copy())
 
     def _set(self, e):
@@ -347,11 +351,14 @@ class StreamingHistogram:
             if not self._warned:
                 warnings.warn(f"histogram: extending to [{xmin:.6g}, {xmax:.6g}] would need "
                               f"{nb + add_lo + add_hi} bins > max_bins={self.max_bins}; samples "
-                              f"outside are counted as under/overflow", RuntimeWarning, stacklevel=3)
+                              "outside are counted as under/overflow",
+                              RuntimeWarning, stacklevel=3)
                 self._warned = True
             return
-        new = np.concatenate([e[0] - w * np.arange(add_lo, 0, -1), e, e[-1] + w * np.arange(1, add_hi + 1)])
-        self.counts = np.concatenate([np.zeros(add_lo, np.int64), self.counts, np.zeros(add_hi, np.int64)])
+        new = np.concatenate([e[0] - w * np.arange(add_lo, 0, -1), e,
+                              e[-1] + w * np.arange(1, add_hi + 1)])
+        self.counts = np.concatenate([np.zeros(add_lo, np.int64), self.counts,
+                                      np.zeros(add_hi, np.int64)])
         self._edges = new
         rows = self._rows(self.counts.size)
         while self._nbat >= rows:

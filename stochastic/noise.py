@@ -122,7 +122,8 @@ def _check_band(band):
     try:
         lo, hi = band
     except (TypeError, ValueError):
-        raise ValueError(f"band: must be a pair (f_lo, f_hi) in Hz with 0 <= f_lo < f_hi, got {band!r}") from None
+        raise ValueError(f"band: must be a pair (f_lo, f_hi) in Hz with 0 <= f_lo < f_hi, got "
+                         f"{band!r}") from None
     lo = finite("band", lo)
     hi = finite("band", hi)
     if lo < 0 or not hi > lo:
@@ -272,7 +273,8 @@ class _BlockNoise(Excitation):
             block_duration = positive("block_duration", block_duration, unit="s")
             nb = int(round(block_duration / self.h))
             if nb < 16:
-                raise ValueError(f"block_duration: must be >= 16 h = {16 * self.h:.6g} s, got {block_duration!r}")
+                raise ValueError(f"block_duration: must be >= 16 h = {16 * self.h:.6g} s, got "
+                                 f"{block_duration!r}")
         self.n_block = nb
         if fade_duration is None:
             nf = nb // 2
@@ -373,7 +375,8 @@ class _BlockNoise(Excitation):
         nyq = 0.5 / dt
         if not self.band[1] < nyq:
             raise ValueError(f"dt: step {dt:.6g} s has Nyquist frequency {nyq:.6g} Hz, not above "
-                             f"the band's upper edge {self.band[1]:.6g} Hz; use dt < {0.5 / self.band[1]:.6g} s "
+                             f"the band's upper edge {self.band[1]:.6g} Hz; use dt < "
+                             f"{0.5 / self.band[1]:.6g} s "
                              f"or lower band")
 
     def describe(self) -> dict:
@@ -477,7 +480,8 @@ class _BlockNoise(Excitation):
         return win, wout
 
     def block_arrays(self, i):
-        """(t_start, y, y', y'') of block ``i`` on ``t_start + j h``, j = 0 .. n_block (s, m, m/s, m/s^2)."""
+        """(t_start, y, y', y'') of block ``i`` on ``t_start + j h``, j = 0 .. n_block
+        (s, m, m/s, m/s^2)."""
         i = self._block_index(i)
         key = ("block", i)
         if key in self._cache:
@@ -513,9 +517,11 @@ class _BlockNoise(Excitation):
         grid nodes enclosing the span. ``block_duration`` must be None or equal to the
         noise's own (it is fixed when the noise is made, since it determines the numbers).
         Memory: one block (plus two cached realizations), whatever the span."""
-        if block_duration is not None and abs(float(block_duration) - self.block_duration) > 0.5 * self.h:
+        if (block_duration is not None
+                and abs(float(block_duration) - self.block_duration) > 0.5 * self.h):
             raise ValueError(f"block_duration: the noise was made with block_duration="
-                             f"{self.block_duration!r} s; pass that or None, got {block_duration!r}")
+                             f"{self.block_duration!r} s; pass that or None, got "
+                             f"{block_duration!r}")
         t_start, t_end = self._span(t_start, t_end)
         B = self.block_duration
         i0 = int(math.floor(t_start / B))
@@ -534,7 +540,8 @@ class _BlockNoise(Excitation):
     def _span(self, t_start, t_end):
         t_start = finite("t_start", t_start)
         if t_start < 0:
-            raise ValueError(f"t_start: must be >= 0 s (the noise starts at t = 0), got {t_start!r}")
+            raise ValueError(f"t_start: must be >= 0 s (the noise starts at t = 0), "
+                             f"got {t_start!r}")
         if t_end is None:
             if self.duration is None:
                 raise ValueError("t_end: required when the noise has no duration")
@@ -620,7 +627,8 @@ class SpectralNoise(_BlockNoise):
             if np.any(g_tab < 0):
                 raise ValueError("psd: table values G must be >= 0 u^2/Hz")
             if f_tab[0] > lo or f_tab[-1] < hi:
-                raise ValueError(f"psd: table covers [{f_tab[0]}, {f_tab[-1]}] Hz, must cover band {self.band}")
+                raise ValueError(f"psd: table covers [{f_tab[0]}, {f_tab[-1]}] Hz, must cover "
+                                 f"band {self.band}")
             self._table_f = (f_tab, g_tab)
             self._fn = None
         self._psd_scale = 1.0
@@ -829,7 +837,8 @@ class Recorded(Excitation):
             h = positive("h", h, unit="s")
         n = int(math.floor((t[-1] - t[0]) / h * (1 + 1e-12))) + 1
         if n > _MAX_TABLE_SAMPLES:
-            raise ValueError(f"h: {h:.6g} s would tabulate {n:.3g} samples (> {_MAX_TABLE_SAMPLES}); "
+            raise ValueError(f"h: {h:.6g} s would tabulate {n:.3g} samples (> "
+                             f"{_MAX_TABLE_SAMPLES}); "
                              f"give a larger h")
         spline = CubicSpline(t, y, bc_type=bc_type)
         tg = t[0] + h * np.arange(n)

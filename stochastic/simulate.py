@@ -40,7 +40,8 @@ def _parse_channel(name, model):
     elif kind in ("delta", "force"):
         i = 0 if idx is None else int(idx)
         if not 0 <= i < model.n_elements:
-            raise ValueError(f"channels: {name!r} indexes element {i}, the model has {model.n_elements}")
+            raise ValueError(f"channels: {name!r} indexes element {i}, the model has "
+                             f"{model.n_elements}")
     else:
         if idx is not None:
             raise ValueError(f"channels: {name!r}: the excitation channel takes no index")
@@ -277,7 +278,8 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     if transient is None:
         transient = default_transient(model)
     transient = nonnegative("transient", transient, unit="s")
-    if isinstance(store_every, bool) or not isinstance(store_every, (int, np.integer)) or store_every < 1:
+    if (isinstance(store_every, bool) or not isinstance(store_every, (int, np.integer))
+            or store_every < 1):
         raise ValueError(f"store_every: must be an integer >= 1, got {store_every!r}")
     if dt is None:
         dt = nlbeam.default_dt(model, excitation, method)
@@ -289,7 +291,8 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     n_tr = int(round(transient / (dt * store_every))) * store_every  # steps, on the sample grid
     n_keep = int(round(duration / (dt * store_every))) * store_every
     if n_keep < 2 * store_every:
-        raise ValueError(f"duration: must span at least 2 samples (>= {2 * dt * store_every:.3g} s)")
+        raise ValueError(f"duration: must span at least 2 samples "
+                         f"(>= {2 * dt * store_every:.3g} s)")
     n_total = n_tr + n_keep
     t_total_end = t0 + n_total * dt
     hi = excitation.time_span()[1]
@@ -312,7 +315,8 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
         try:
             h0, h1 = (float(v) for v in keep_history)
         except (TypeError, ValueError):
-            raise ValueError(f"keep_history: must be (t0, t1) in s or None, got {keep_history!r}") from None
+            raise ValueError(f"keep_history: must be (t0, t1) in s or None, "
+                             f"got {keep_history!r}") from None
         if not h1 > h0:
             raise ValueError(f"keep_history: must satisfy t0 < t1, got {keep_history!r}")
     if progress is True:
@@ -389,7 +393,8 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
         n_steps += tr.n_steps
         n_chunks += 1
         if tr.min_steps_per_contact > 0:
-            min_spc = tr.min_steps_per_contact if min_spc == 0 else min(min_spc, tr.min_steps_per_contact)
+            spc = tr.min_steps_per_contact
+            min_spc = spc if min_spc == 0 else min(min_spc, spc)
         # samples on the global grid t0 + j store_every dt, [t_a, t_b): drop the chunk end
         j = np.rint((tr.t - t0) / (dt * store_every))
         on_grid = np.abs((tr.t - t0) / (dt * store_every) - j) < 1e-6
@@ -430,7 +435,8 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     store_results(res, est, min_window)
     if keep_history is not None:
         res.history = {k: (np.concatenate(v) if v else np.zeros(0)) for k, v in hist_parts.items()}
-    res.n_impacts, res.n_steps, res.n_chunks, res.n_samples = n_impacts, n_steps, n_chunks, n_samples
+    res.n_impacts, res.n_steps = n_impacts, n_steps
+    res.n_chunks, res.n_samples = n_chunks, n_samples
     res.n_impacts_transient = n_impacts_tr
     res.contact_fraction = contact_time / (n_keep * dt)
     res.min_steps_per_contact = min_spc
@@ -470,7 +476,8 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
                 f"{t_bad_onset:.9g} s): a grazing re-contact the integrator did not resolve; the "
                 "statistics after it are unreliable; change dt or the seed")
         res.success = False
-        res.message = ("failed: " + text + ("; " + res.message if res.message != "completed" else ""))
+        earlier = "; " + res.message if res.message != "completed" else ""
+        res.message = "failed: " + text + earlier
         warnings.warn(text, RuntimeWarning, stacklevel=2)
     res.wall_time = time.perf_counter() - t_wall
     return res
@@ -631,7 +638,8 @@ def _member(args):
     return simulate(model, make_excitation, seed=seed, **kwargs)
 
 
-def ensemble(model, make_excitation, seeds, duration, *, processes=None, **kwargs) -> EnsembleResult:
+def ensemble(model, make_excitation, seeds, duration, *, processes=None,
+             **kwargs) -> EnsembleResult:
     """Run ``simulate`` once per seed (excitation ``make_excitation(seed)``) in a process
     pool and combine. make_excitation must be picklable (a module-level function) unless
     ``processes=1`` (run in this process). Other keywords go to :func:`simulate`."""

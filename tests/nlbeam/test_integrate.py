@@ -17,7 +17,7 @@ def free_mass_on_stop(law="hertz", m=1e-2, K=1e8, e=None, mu=None):
     return nlbeam.System([[m]], [[0.0]], [[0.0]], (el,), "force", output_dof=0)
 
 
-# --- linear analytic answers -----------------------------------------------------------------------
+# --- linear analytic answers ----------------------------------------------------------------------
 @pytest.mark.parametrize("method", ["rk4", "adaptive"])
 def test_stop_removed_gives_the_analytic_transmissibility(method):
     model = PAPER.replace(K_hertz=0.0)
@@ -93,7 +93,7 @@ def test_a_brief_touch_between_step_ends_is_not_missed():
     assert contact_samples < tr.n_impacts   # most touches fall between the stored samples
 
 
-# --- convergence across impacts ----------------------------------------------------------------------
+# --- convergence across impacts -------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def reference_state():
     tr = nlbeam.integrate(PAPER, F40, 0.3, method="adaptive", rtol=1e-13, atol=1e-19,
@@ -196,7 +196,7 @@ def test_restitution_of_an_isolated_impact_approaches_nominal_e_as_e_tends_to_1(
     assert all(a > b for a, b in zip(gaps, gaps[1:]))
 
 
-# --- a 2-DOF system with a stop --------------------------------------------------------------------
+# --- a 2-DOF system with a stop -------------------------------------------------------------------
 def two_dof(K_stop=1e8, law="hertz", b=0.0):
     M = np.diag([0.04, 0.02])
     Kmat = np.array([[800.0 + 400.0, -400.0], [-400.0, 400.0]])
@@ -223,13 +223,14 @@ def test_two_dof_with_a_stop_conserves_energy_and_methods_agree():
     a = nlbeam.integrate(sysm, ex, 0.5, x0=x0, dt=1e-4, steps_per_contact=256)
     b = nlbeam.integrate(sysm, ex, 0.5, x0=x0, method="adaptive", rtol=1e-11, atol=1e-16, dt=1e-4)
     assert a.n_impacts == b.n_impacts > 5
-    E = (0.5 * np.einsum("ni,ij,nj->n", a.v, sysm.M, a.v) + 0.5 * np.einsum("ni,ij,nj->n", a.x, sysm.K, a.x)
+    E = (0.5 * np.einsum("ni,ij,nj->n", a.v, sysm.M, a.v)
+         + 0.5 * np.einsum("ni,ij,nj->n", a.x, sysm.K, a.x)
          + 0.4 * 1e8 * np.clip(a.delta[:, 0], 0, None) ** 2.5)
     assert np.max(np.abs(E / E[0] - 1)) < 1e-6
     assert np.max(np.abs(a.x - b.x)) < 1e-6 * np.max(np.abs(b.x))
 
 
-# --- storage and bad input -------------------------------------------------------------------------
+# --- storage and bad input ------------------------------------------------------------------------
 def test_store_every_and_none():
     full = nlbeam.integrate(PAPER, F40, 0.1, dt=1e-4)
     sparse = nlbeam.integrate(PAPER, F40, 0.1, dt=1e-4, store_every=10)

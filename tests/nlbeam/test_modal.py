@@ -48,7 +48,8 @@ def test_frequencies_match_characteristic_equation(bc):
     mb = ModalBeam(length=0.5, width=0.02, thickness=1e-3, E=2.0e11, density=7800.0,
                    stop_position=0.2, n_modes=10, bc=bc, K_hertz=0.0)
     I, A = 0.02 * 1e-3 ** 3 / 12, 0.02 * 1e-3
-    f_exact = _char_roots(bc, 10) ** 2 * math.sqrt(2.0e11 * I / (7800.0 * A)) / 0.5 ** 2 / (2 * math.pi)
+    f_exact = (_char_roots(bc, 10) ** 2 * math.sqrt(2.0e11 * I / (7800.0 * A)) / 0.5 ** 2
+               / (2 * math.pi))
     np.testing.assert_allclose(mb.modal_frequencies, f_exact, rtol=1e-9)
     # the assembled System (coordinates [x at the stop, z_2..z_N]) has the same spectrum
     np.testing.assert_allclose(mb.natural_frequencies(), f_exact, rtol=1e-6)
@@ -88,7 +89,8 @@ def test_harmonic_base_response_matches_modal_superposition(bc, f_exc):
         phi_a.append(_textbook_shape(bc, b, a / L) / nrm)
         gam.append(_simpson(s, xi) / nrm)
     w = 2 * math.pi * f_exc
-    H = sum(p * g * w * w / (wn * wn - w * w + 2j * zeta * wn * w) for p, g, wn in zip(phi_a, gam, wi))
+    H = sum(p * g * w * w / (wn * wn - w * w + 2j * zeta * wn * w)
+            for p, g, wn in zip(phi_a, gam, wi))
     exc = nlbeam.Harmonic(A, f_exc)
     tr = nlbeam.integrate(mb, exc, 1.6, dt=2e-5)
     sel = tr.t > 1.4
@@ -129,7 +131,8 @@ def test_calibration_first_mode_at_the_stop():
     mb = ModalBeam.paper(n_modes=4)
     assert mb.contact_mass == pytest.approx(37.75e-3, rel=1e-12)
     assert mb.contact_stiffness == pytest.approx(736.3, rel=1e-12)
-    assert mb.modal_frequencies[0] == pytest.approx(math.sqrt(736.3 / 37.75e-3) / (2 * math.pi), rel=1e-12)
+    f1 = math.sqrt(736.3 / 37.75e-3) / (2 * math.pi)
+    assert mb.modal_frequencies[0] == pytest.approx(f1, rel=1e-12)
     assert ModalBeam.paper(n_modes=1).base_weight == pytest.approx(1.0, abs=1e-12)
 
 
@@ -177,7 +180,8 @@ def test_works_with_stochastic_and_continuation():
     (dict(length=-1.0), "length"), (dict(stop_position=0.5, length=0.4), "stop_position"),
     (dict(stop_position=0.0), "stop_position"), (dict(n_modes=0), "n_modes"),
     (dict(n_modes=2.5), "n_modes"), (dict(bc="pinned"), "bc"), (dict(E=0.0), "E"),
-    (dict(density=-1.0), "density"), (dict(zeta=[0.1, 0.2]), "zeta"), (dict(thickness=None), "width"),
+    (dict(density=-1.0), "density"), (dict(zeta=[0.1, 0.2]), "zeta"),
+    (dict(thickness=None), "width"),
     (dict(I=1e-12), "I, A"), (dict(gap=float("nan")), "gap"),
     (dict(bc="clamped-clamped", stop_position=0.4, length=0.4), "stop_position")])
 def test_bad_input_names_the_parameter(kw, name):
@@ -189,12 +193,14 @@ def test_scene_names_the_modal_beam(tmp_path):
     from nlbeam.app.scenes.schema import build_model
     from nlbeam.scenes import SceneError, load_scene, run_scene
 
-    sc = load_scene(os.path.join(os.path.dirname(__file__), "..", "..", "figures", "modal_beam.toml"))
+    root = os.path.join(os.path.dirname(__file__), "..", "..")
+    sc = load_scene(os.path.join(root, "figures", "modal_beam.toml"))
     m = build_model(sc.model)
     assert isinstance(m, ModalBeam) and m.n_modes == 4
     p = tmp_path / "s.toml"
     p.write_text('[model]\nname = "ModalBeam"\nn_modes = 2\n[stochastic]\nduration = 1.0\n'
-                 'transient = 0.2\nrms = 1e-4\npsd_resolution = 2.0\n[[figure]]\nkind = "psd"\nfile = "p.png"\n')
+                 'transient = 0.2\nrms = 1e-4\npsd_resolution = 2.0\n[[figure]]\nkind = '
+                 '"psd"\nfile = "p.png"\n')
     run_scene(p, tmp_path / "out")
     assert (tmp_path / "out" / "p.png").exists()
     for text, key in (('[model]\nname = "ModalBeam"\nm = 0.1\n', "model.m"),

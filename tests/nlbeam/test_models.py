@@ -37,9 +37,11 @@ def test_hertz_stiffness_from_material_and_geometry():
     # two equal PTFE-like spheres: E = 0.5 GPa, nu = 0.46, R = 5 mm
     E, nu, R = 0.5e9, 0.46, 5e-3
     Er = 2 / (2 * (1 - nu ** 2) / E)
-    assert nlbeam.hertz_stiffness(E, nu, R, E, nu, R) == pytest.approx(2 / 3 * Er * math.sqrt(R / 2))
+    assert nlbeam.hertz_stiffness(E, nu, R, E, nu, R) == \
+        pytest.approx(2 / 3 * Er * math.sqrt(R / 2))
     # sphere on a flat: R_r = R
-    assert nlbeam.hertz_stiffness(E, nu, R, E, nu, math.inf) == pytest.approx(2 / 3 * Er * math.sqrt(R))
+    assert nlbeam.hertz_stiffness(E, nu, R, E, nu, math.inf) == \
+        pytest.approx(2 / 3 * Er * math.sqrt(R))
 
 
 def test_mu_and_e_are_inverse():

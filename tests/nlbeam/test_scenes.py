@@ -223,7 +223,8 @@ def test_no_stability_where_none_is_shown(tmp_path, monkeypatch):
     rows = list(csv.DictReader(open(out / "peaks.csv")))
     assert rows and all(r["stable"] == "" for r in rows)
     # a diagram figure shows stability: another cache entry, computed with it
-    scene.write_text(PERIODIC + STOCH + PEAKS_NO_STAB + '[[figure]]\nkind = "frc"\nfile = "f.png"\n')
+    scene.write_text(PERIODIC + STOCH + PEAKS_NO_STAB + '[[figure]]\nkind = "frc"\nfile = '
+                                                        '"f.png"\n')
     rep2 = run_scene(scene, out, quiet=True)
     (per2,) = [j for j in rep2.jobs if j.kind == "periodic"]
     assert seen == [False, True] and per2.path != per.path

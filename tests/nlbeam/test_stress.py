@@ -169,7 +169,8 @@ def test_a_contact_held_by_the_base_is_not_left_by_the_graded_exit():
               disc0=[[0.0, 0.23541315235426458]], event_log=10, store_every=1)
     model = nlbeam.BeamImpact.paper()
     a = nlbeam.integrate(model, ex, 23.816, dt=5e-5, **kw)
-    b = nlbeam.integrate(model, ex, 23.816, method="adaptive", rtol=1e-10, atol=1e-14, dt=5e-5, **kw)
+    b = nlbeam.integrate(model, ex, 23.816, method="adaptive", rtol=1e-10, atol=1e-14, dt=5e-5,
+                         **kw)
     assert a.n_events == b.n_events == 2
     assert a.events[1, 0] == pytest.approx(b.events[1, 0], abs=1e-7)
     assert a.events[1, 3] == pytest.approx(b.events[1, 3], rel=1e-3)
@@ -206,7 +207,8 @@ def test_a_record_split_inside_a_contact_counts_no_short_contact(method):
     if method == "rk4":
         assert b.min_steps_per_contact >= MIN_STEPS_PER_CONTACT
     assert a.n_impacts + b.n_impacts == whole.n_impacts
-    assert np.max(np.abs(b.state_end - whole.state_end) / np.array([1e-4, 1e-4 * 2 * math.pi * 40])) < 1e-4
+    scale = np.array([1e-4, 1e-4 * 2 * math.pi * 40])
+    assert np.max(np.abs(b.state_end - whole.state_end) / scale) < 1e-4
 
 
 @pytest.mark.parametrize("method", ["rk4", "adaptive"])

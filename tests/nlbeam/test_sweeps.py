@@ -93,7 +93,8 @@ def test_dask_cluster_gives_the_same_results_as_the_pool(pool_run, tmp_path):
                          quiet=True)
     assert drep.computed == 2
     # same keys (cache file names) and bit-identical PSDs
-    assert [os.path.basename(j.path) for j in drep.jobs] == [os.path.basename(j.path) for j in rep.jobs]
+    names = [os.path.basename(j.path) for j in rep.jobs]
+    assert [os.path.basename(j.path) for j in drep.jobs] == names
     for (f1, p1), (f2, p2) in zip(_psds(rep), _psds(drep)):
         assert np.array_equal(f1, f2) and np.array_equal(p1, p2)
     m1 = [stochastic.load(j.path).moments("delta")["kurtosis"] for j in rep.jobs]

@@ -53,7 +53,8 @@ def composite(noise, t):
 
 @pytest.fixture(scope="module")
 def small_noise():
-    return st.BandLimitedNoise((20.0, 80.0), rms=1e-3, seed=3, block_duration=0.5, fade_duration=0.2)
+    return st.BandLimitedNoise((20.0, 80.0), rms=1e-3, seed=3, block_duration=0.5,
+                               fade_duration=0.2)
 
 
 def test_fft_block_equals_direct_cosine_sum(small_noise):
@@ -154,7 +155,8 @@ def test_realized_psd_variance_and_gaussianity(noise, res):
 
 def test_cross_fades_keep_variance_and_gaussianity():
     """Only the samples inside cross-fades, from many joins."""
-    n = st.BandLimitedNoise((23.0, 43.0), psd_level=1e-8, seed=5, block_duration=0.4, fade_duration=0.3)
+    n = st.BandLimitedNoise((23.0, 43.0), psd_level=1e-8, seed=5, block_duration=0.4,
+                            fade_duration=0.3)
     mom = st.StreamingMoments()
     for i in range(1, 400):
         _, y, _, _ = n.block_arrays(i)
@@ -233,7 +235,8 @@ def test_noise_with_duration_is_an_excitation_for_integrate():
 
 
 def test_realization_tabulates_the_cosine_sum():
-    r = st.Realization(frequencies=[3.0, 17.5, 40.0], amplitudes=[1e-3, 2e-4, 5e-5], phases=[0.1, 2.0, -1.0])
+    r = st.Realization(frequencies=[3.0, 17.5, 40.0], amplitudes=[1e-3, 2e-4, 5e-5],
+                       phases=[0.1, 2.0, -1.0])
     assert isinstance(r, nlbeam.CosineSum)
     tab = r.sampled(0.5)
     t = np.linspace(0, 0.5, 777)

@@ -76,7 +76,8 @@ def test_linear_response_variance_is_the_integral(linear_run):
     fg = np.linspace(0.0, 50.0, 400_001)
     var = np.trapezoid(np.abs(H_delta(fg)) ** 2 * noise.psd(fg), fg)
     mo = res.moments("delta")
-    assert abs(mo["std"] ** 2 - var) < 4 * mo["se_variance"], (mo["std"] ** 2, var, mo["se_variance"])
+    assert abs(mo["std"] ** 2 - var) < 4 * mo["se_variance"], \
+        (mo["std"] ** 2, var, mo["se_variance"])
     assert abs(mo["skewness"]) < 4 * mo["se_skewness"]
     assert abs(mo["kurtosis"] - 3) < 4 * mo["se_kurtosis"]
     assert res.n_averages("delta") >= 450 and res.n_impacts == 0
@@ -89,12 +90,14 @@ def test_chunked_loop_equals_statistics_of_its_history(k_hertz):
     # rk4: fixed steps make the chunked and the single run the same map (adaptive restarts
     # its step-size control at every chunk join)
     res = st.simulate(model, noise, 3.0, transient=0.5, channels=("delta", "x"), dt=1e-4,
-                      method="rk4", chunk_duration=0.37, psd_resolution=2.0, keep_history=(0.0, 10.0))
+                      method="rk4", chunk_duration=0.37, psd_resolution=2.0,
+                      keep_history=(0.0, 10.0))
     t = res.history["t"]
     assert t[0] == pytest.approx(0.5) and t.size == 30_000
     assert np.allclose(np.diff(t), 1e-4, rtol=0, atol=1e-12)  # no duplicate at chunk joins
     d = res.history["delta"]
-    f, P = scipy.signal.welch(d, res.fs, window="hann", nperseg=5000, noverlap=2500, detrend="constant")
+    f, P = scipy.signal.welch(d, res.fs, window="hann", nperseg=5000, noverlap=2500,
+                              detrend="constant")
     assert np.max(np.abs(res.psd("delta")[1] - P)) < 1e-12 * P.max()
     mo = res.moments("delta")
     assert mo["mean"] == pytest.approx(d.mean(), rel=1e-10)
@@ -216,7 +219,8 @@ def test_harmonic_and_realization_excitations_run():
     model = nlbeam.BeamImpact(K_hertz=0.0)
     kw = dict(transient=0.0, dt=2e-4, outputs=("moments",), channels=("x",), chunk_duration=0.25)
     a = st.simulate(model, nlbeam.Harmonic(1e-4, 20.0), 1.0, **kw)
-    b = st.simulate(model, st.Realization(frequencies=[20.0], amplitudes=[1e-4], phases=[0.0]), 1.0, **kw)
+    one_line = st.Realization(frequencies=[20.0], amplitudes=[1e-4], phases=[0.0])
+    b = st.simulate(model, one_line, 1.0, **kw)
     assert a.moments("x")["std"] == pytest.approx(b.moments("x")["std"], rel=1e-9)
 
 
