@@ -92,9 +92,17 @@ def _frc(args):
     log(f"nlbeam frc: {len(frc.branches)} branches, {frc.n_points} points, "
         f"{len(frc.bifurcations)} bifurcations in {frc.wall_time:.1f} s -> {args.out}")
     if not args.quiet:
-        for b in frc.bifurcations:
-            print(f"{b.kind:16s} order {b.order}  f = {b.frequency:.9g} +- {b.error:.1e} Hz  "
-                  f"|x|max = {b.xmax * 1e3:.4f} mm" + (f"  ({b.note})" if b.note else ""))
+        from .scenes.bifurcation_list import list_bifurcations
+        from .scenes.numbers import error_bound, with_error
+
+        rows = list_bifurcations(frc)
+        if rows:
+            print(f"{'f [Hz]':>14s}  {'error [Hz]':>10s}  {'kind':24s} order branch  "
+                  f"|x|max [mm]  (sorted; reports of one point merged)")
+        for r in rows:
+            print(f"{with_error(r.frequency, r.frequency_error):>14s}  "
+                  f"{error_bound(r.frequency_error):>10s}  {r.kind:24s} {r.order:5d} "
+                  f"{r.branch:6d}  {r.xmax * 1e3:11.4f}" + (f"  ({r.note})" if r.note else ""))
     if args.plot:
         from .plots.files import files_backend, save_figure
         from .plots.frequency_response import plot_frequency_response

@@ -12,7 +12,8 @@ from .. import defaults
 from ..compare import map_peaks
 from ..files import write_text_atomic
 from ..plots.scene import scene_figure
-from .numbers import bifurcation_error, error_bound, with_error, xmax_error
+from .bifurcation_list import bifurcation_rows
+from .numbers import with_error
 from .schema import build_noise, default_f_max
 
 __all__ = ["write_outputs", "write_table", "distinct"]
@@ -32,6 +33,16 @@ def _by_variant(scene, jobs, results):
 
 
 #: which analyses each output reads
+# the header of a table with no rows (e.g. a diagram without bifurcations)
+_EMPTY_COLUMNS = {
+    "moments": ["variant", "channel", "mean", "std", "skewness", "kurtosis", "se_mean",
+                "se_std", "se_skewness", "se_kurtosis"],
+    "peaks": ["variant", "channel", "frequency_hz", "prominence_dec", "kind", "order",
+              "branch_frequency_hz", "stable", "distance_hz", "tolerance_hz", "xmax_m", "note",
+              "explained_by_hz"],
+    "bifurcations": ["variant", "branch", "order", "kind", "frequency_hz", "frequency_error_hz",
+                     "xmax_m", "note"]}
+
 _READS = {"frc": ("periodic",), "bifurcations": ("periodic",), "history": ("stochastic",),
           "psd": ("stochastic",), "pdf": ("stochastic",), "excitation_psd": ("stochastic",),
           "moments": ("stochastic",), "compare": ("periodic", "stochastic"),
@@ -95,14 +106,9 @@ def write_table(d, variants, out_dir):
                     row["stable"] = ""  # not asked for (and not computed when supported)
                 rows.append({"variant": label, "channel": ch, **row})
         else:
-            for b in per.bifurcations:
-                e_f = bifurcation_error(b, per)
-                rows.append({"variant": label, "kind": b.kind, "order": b.order,
-                             "frequency_hz": with_error(b.frequency, e_f),
-                             "xmax_m": with_error(b.xmax, xmax_error(b, per, e_f)),
-                             "tolerance": error_bound(e_f)})
+            rows += bifurcation_rows(per, label)
     buf = io.StringIO()
-    cols = list(dict.fromkeys(k for r in rows for k in r)) or ["variant"]
+    cols = list(dict.fromkeys(k for r in rows for k in r)) or _EMPTY_COLUMNS[kind]
     wr = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
     wr.writeheader()
     for r in rows:
