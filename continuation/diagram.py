@@ -72,7 +72,9 @@ class Bifurcation:
     could not be located at a finer step, which the diagram's warning lists) or from
     refine_bifurcations; levels: the values at the successive step halvings (not saved);
     tolerance: width of the tracer's final bracket on the diagram's own branch (where it
-    located the point; not an error bar); xmax (m); order of the branch it lies on; branch
+    located the point; not an error bar); refine_status: '' (not refined), 'refined' (then
+    ``refined`` holds the record, saved and loaded with the diagram, its ``levels`` not) or
+    'failed: <reason>' (refine_bifurcations could not, or would not, refine it); xmax (m); order of the branch it lies on; branch
     index; multipliers (for a grazing point: those of the branch point on the far side of the
     bracket; None without stability); note: '' for a bifurcation of the smooth map, or 'at
     grazing: multiplier jumps from .. to .. (non-smooth)' where a multiplier jumps through +1,
@@ -95,6 +97,7 @@ class Bifurcation:
     # impacts within the bracket' where k close ones were merged (Tracer steps may or may not
     # resolve them one by one)
     levels: np.ndarray | None = None
+    refine_status: str = ""  # '' not refined, 'refined', or 'failed: <reason>' (saved)
 
     @property
     def smooth(self):
