@@ -207,6 +207,23 @@ def load(path) -> StochasticResult:
     return load_stochastic_result(path)
 
 
+def _history_window(window, t_kept, duration):
+    """keep_history (s after the transient) -> the absolute window [h0, h1] s; raises when it
+    is not a window inside the kept record [0, duration]."""
+    try:
+        w0, w1 = (float(v) for v in window)
+    except (TypeError, ValueError):
+        raise ValueError(f"keep_history: must be (t0, t1) in s after the transient or None, "
+                         f"got {window!r}") from None
+    if not w1 > w0:
+        raise ValueError(f"keep_history: must satisfy t0 < t1, got {window!r}")
+    slack = 1e-9 * max(duration, 1.0)
+    if w0 < -slack or w1 > duration + slack:
+        raise ValueError(f"keep_history: {window!r} s lies outside the kept record [0, "
+                         f"{duration:.6g}] s (times count from the end of the transient)")
+    return t_kept + w0, t_kept + w1
+
+
 def _default_resolution(duration):
     # >= ~31 Welch averages (50 % overlap), never finer than 0.05 Hz
     return max(0.05, 16.0 / duration)
@@ -234,7 +251,10 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     a DOP853 rtol 1e-13 reference; benchmarks/stochastic_work_precision.py) at ~0.4 the CPU of
     rk4 with dt = 5e-5 s and 32 steps per contact, whose error there is 5.6e-4.
     psd_resolution: Welch bin spacing (Hz), default max(0.05, 16/duration).
-    keep_history: (t0, t1) s, keep the samples in that window (memory ~ its length).
+    keep_history: (t0, t1) s after the transient (0 <= t0 < t1 <= duration: a window
+    outside the kept record raises), keep the samples in that window (memory ~ its length);
+    ``history["t"]`` holds their times from the excitation's start (t_start + transient + t0
+    onwards).
     chunk_duration: s per call to the integrator (default: the noise's block or 1 s).
     pdf_bins / pdf_edges: histogram (edges chosen from the first kept chunk if not given).
     batch_duration: s per fine batch of the standard errors (default 64 samples); the
@@ -312,13 +332,8 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     batch = 64 if batch_duration is None else max(
         int(round(positive("batch_duration", batch_duration, unit="s") * fs)), 1)
     if keep_history is not None:
-        try:
-            h0, h1 = (float(v) for v in keep_history)
-        except (TypeError, ValueError):
-            raise ValueError(f"keep_history: must be (t0, t1) in s or None, "
-                             f"got {keep_history!r}") from None
-        if not h1 > h0:
-            raise ValueError(f"keep_history: must satisfy t0 < t1, got {keep_history!r}")
+        h0, h1 = _history_window(keep_history, t0 + n_tr * dt, n_keep * dt)
+        h_tol = 1e-6 * dt * store_every  # the ends are samples: round-off of the grid times
     if progress is True:
         def progress(done, total):  # noqa: F811 - the printing default
             print(f"stochastic.simulate: {done:.4g} / {total:.4g} s", file=sys.stderr)
@@ -410,11 +425,11 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
                 data = np.ascontiguousarray(_extract(tr, kind, i, sel))
                 feed(est[ch], data)
                 if keep_history is not None:
-                    hsel = (tr.t[sel] >= h0) & (tr.t[sel] <= h1)
+                    hsel = (tr.t[sel] >= h0 - h_tol) & (tr.t[sel] <= h1 + h_tol)
                     if np.any(hsel):
                         hist_parts[ch].append(data[hsel])
             if keep_history is not None:
-                hsel = (tr.t[sel] >= h0) & (tr.t[sel] <= h1)
+                hsel = (tr.t[sel] >= h0 - h_tol) & (tr.t[sel] <= h1 + h_tol)
                 if np.any(hsel):
                     hist_parts["t"].append(tr.t[sel][hsel])
         k0 = k1

@@ -14,6 +14,8 @@ from ..scenes.schema import build_noise, default_f_max, history_channels, histor
 from .compare import plot_comparison
 from .files import files_backend, save_figure
 from .frequency_response import plot_frequency_response
+from .stochastic import TIME_LABEL, kept_time
+from .units import axis_label, channel_unit, excitation_kind
 
 __all__ = ["scene_figure"]
 
@@ -60,14 +62,15 @@ def scene_figure(scene_title, d, variants, out_dir):
                                         figsize=(8, 2.2 * len(chans) + 1), squeeze=False)
                 h = sto.history
                 w = history_window(d, s["duration"])
-                tt = h["t"] - (sto.transient if s["transient"] is None else s["transient"])
-                sel = (tt >= w[0]) & (tt <= w[1])
+                tt = kept_time(sto)  # s after the transient, as the window
+                sel = (tt >= w[0] - 1e-9) & (tt <= w[1] + 1e-9)
+                kind = excitation_kind(sto.model_parameters)
                 for ax, c in zip(axs[:, 0], chans):
-                    sc = 1.0 if c == "force" else 1e3
+                    _, unit, sc = channel_unit(c, kind)
                     ax.plot(tt[sel], h[c][sel] * sc, lw=0.8)
-                    ax.set_ylabel({"force": "force [N]", "v": "v [mm/s]",
-                                   "yd": "yd [mm/s]"}.get(c, f"{c} [mm]"))
-                axs[-1, 0].set_xlabel("time [s]")
+                    ax.set_ylabel(axis_label(c, unit))
+                axs[-1, 0].set_xlabel(TIME_LABEL)
+                axs[-1, 0].set_xlim(w[0], w[1])
                 axs[0, 0].set_title(t)
                 fig.tight_layout()
             written.append(save_figure(fig, path))

@@ -11,7 +11,6 @@ from dataclasses import dataclass, field
 
 import continuation
 import stochastic
-from stochastic.simulate import default_transient
 
 from ..files import remove_stale_temporaries, write_text_atomic
 from ..sweeps import run_jobs
@@ -38,11 +37,8 @@ def compute(job_inputs):
             n_grid=p["n_grid"], segments=p["segments"], dt_scale=p["dt_scale"], **kw)
     s = job_inputs["stochastic"]
     hist = job_inputs["history"]
-    transient = s["transient"]
-    if transient is None:  # the history window is counted from its end
-        transient = default_transient(model)
-    keep = None if hist is None else (transient + hist[0], transient + hist[1])
-    return stochastic.simulate(model, build_noise(s), s["duration"], transient,
+    keep = None if hist is None else tuple(hist)  # s after the transient, as in simulate
+    return stochastic.simulate(model, build_noise(s), s["duration"], s["transient"],
                                outputs=tuple(job_inputs["outputs"]),
                                channels=tuple(job_inputs["channels"]), method=s["method"],
                                psd_resolution=s["psd_resolution"], keep_history=keep,
