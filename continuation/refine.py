@@ -18,6 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nlbeam.summary import Summary
+
 from ._newton import ConvergenceError
 from .shooting import Integrator, _problem_from_state
 
@@ -29,8 +31,8 @@ LEVELS = tuple(Integrator(dt_scale=s, steps_per_contact=32 / s) for s in
                (1 / 4, 1 / 8, 1 / 16, 1 / 32))
 
 
-@dataclass
-class Refined:
+@dataclass(repr=False)
+class Refined(Summary):
     """A fold or period doubling located at several integrator settings.
 
     values (k,): the parameter value (Hz for frequency) at each of ``levels`` (Integrators,

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nlbeam._validate import nonnegative, positive
+from nlbeam.summary import Summary, describe_value
 from nlbeam.vocabulary import CHANNELS
 
 from .assemble import feed, make_estimators, store_results
@@ -92,8 +93,8 @@ def _attr(v):
     return str(v)
 
 
-@dataclass
-class StochasticResult:
+@dataclass(repr=False)
+class StochasticResult(Summary):
     """Statistics of one simulated record (the kept ``duration`` after the ``transient``).
 
     Per channel (``channels``): Welch PSD ``psd(ch) -> (f Hz, P units^2/Hz)`` with its
@@ -140,6 +141,36 @@ class StochasticResult:
     wall_time: float = 0.0
     success: bool = True
     message: str = "completed"
+
+    def _summary_rows(self):
+        rows = [("channels", ", ".join(self.channels)), ("outputs", ", ".join(self.outputs)),
+                ("record", f"{self.duration:.6g} s kept after a {self.transient:.6g} s "
+                           f"transient, fs {self.fs:.6g} Hz"),
+                ("method", str(self.method)), ("seed", describe_value(self.seed)),
+                ("impacts", f"{self.n_impacts} ({self.n_impacts / self.duration:.4g} /s)"
+                 if self.duration > 0 else str(self.n_impacts))]
+        for ch in self.channels:
+            parts = []
+            if ch in self.moment_data:
+                mo = self.moment_data[ch]
+                se = float(mo.get("se_std", float("nan")))
+                parts.append(f"std {mo['std']:.4g}" + (f" +- {se:.2g}" if se == se else ""))
+                parts.append(f"kurtosis {mo['kurtosis']:.3g}")
+            if ch in self.psd_data:
+                d = self.psd_data[ch]
+                f = np.asarray(d.get("frequencies", ()))
+                if f.size > 1:
+                    parts.append(f"PSD {f.size} bins of {f[1] - f[0]:.3g} Hz")
+                if "n_segments" in d:
+                    parts.append(f"{int(d['n_segments'])} averages")
+            if ch in self.pdf_data:
+                parts.append(f"PDF {len(self.pdf_data[ch].get('centres', ()))} bins")
+            rows.append((f"  {ch}", ", ".join(parts) or "-"))
+        if self.history is not None and "t" in self.history:
+            rows.append(("history", describe_value(np.asarray(self.history["t"]))))
+        rows += [("success", f"{self.success} ({describe_value(self.message)})"),
+                 ("wall_time [s]", f"{self.wall_time:.3g}")]
+        return rows
 
     def _get(self, store, ch, what):
         if ch not in self.channels:
@@ -604,8 +635,8 @@ def _min_damping_ratio(model):
 
 
 # -- ensembles ----------------------------------------------------------------------------
-@dataclass
-class EnsembleResult:
+@dataclass(repr=False)
+class EnsembleResult(Summary):
     """Members of an ensemble and their combination.
 
     ``psd(ch) -> (f, mean P, lower, upper)``: mean over members with a Student-t 95 %
@@ -616,6 +647,16 @@ class EnsembleResult:
 
     seeds: list
     members: list
+
+    def _summary_rows(self):
+        first = self.members[0] if self.members else None
+        rows = [("members", str(len(self.members))), ("seeds", describe_value(self.seeds))]
+        if first is not None:
+            rows += [("channels", ", ".join(first.channels)),
+                     ("record", f"{first.duration:.6g} s each, fs {first.fs:.6g} Hz"),
+                     ("success", f"{sum(bool(m.success) for m in self.members)} of "
+                                 f"{len(self.members)}")]
+        return rows
 
     def _check(self):
         if len(self.members) < 2:
