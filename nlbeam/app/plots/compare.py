@@ -19,7 +19,7 @@ _ORDER_COLOUR = {1: "C0", 2: "C1", 3: "C2", 4: "C3", 5: "C5", 6: "C4"}
 
 def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, label="delta",
                     unit="m", superharmonic_orders=(2, 3), scale=1e3, fig=None, stability=True,
-                    **map_kw):
+                    ax=None, path=None, **map_kw):
     """The PSD (top, log) and the periodic diagram (bottom, |x|max in mm) on one
     response-frequency axis: an order-n branch at excitation frequency f is drawn at f/n,
     the harmonic branch also at k f for each k in ``superharmonic_orders`` (thin, grey);
@@ -27,15 +27,26 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
     "1 forced" for the forced response in a narrow band) and joined to the point that
     explains it. ``matches`` default: ``map_peaks(psd, frc, excitation, **map_kw)``.
     ``stability=False`` draws every branch solid (for a diagram computed without Floquet
-    multipliers). Returns the Figure."""
+    multipliers). ``ax``: a pair of axes (PSD, diagram) to draw into (sharing x is the
+    caller's choice); else ``fig`` (its two panels are added) or a new figure. ``path``: also
+    write the figure (then closed if this call opened it). Returns the Figure."""
     import matplotlib.pyplot as plt
 
     f, P = (np.asarray(a, dtype=float) for a in psd)
     if matches is None:
         matches = map_peaks((f, P), frc, excitation, **map_kw)
-    if fig is None:
-        fig = plt.figure(figsize=(9, 7))
-    ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [1, 1]})
+    opened = fig is None and ax is None
+    if ax is not None:
+        try:
+            ax1, ax2 = ax
+        except (TypeError, ValueError):
+            raise ValueError("ax: give two axes (the PSD's and the diagram's), got "
+                             f"{ax!r}") from None
+        fig = ax1.figure
+    else:
+        if fig is None:
+            fig = plt.figure(figsize=(9, 7))
+        ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [1, 1]})
     pos = P > 0
     ax1.semilogy(f[pos], P[pos], color="k", lw=0.8, label=f"PSD of {label}")
     holds = _Holds(excitation)
@@ -102,5 +113,13 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
     hi = f_max if f_max is not None else float(f[-1])
     ax1.set_xlim(0.0, hi)
     ax1.set_title("stochastic response peaks and the periodic diagram")
-    fig.tight_layout()
+    if ax is None:
+        fig.tight_layout()
+    if path is not None:
+        from .files import save_figure
+
+        if opened:
+            save_figure(fig, path)
+        else:
+            fig.savefig(path)
     return fig
