@@ -17,10 +17,16 @@ from .frequency_response import plot_frequency_response
 from .stochastic import TIME_LABEL, kept_time
 from .units import axis_label, channel_unit, excitation_kind
 
-__all__ = ["scene_figure"]
+__all__ = ["scene_figure", "suffixed", "PER_VARIANT"]
 
 
-def _suffixed(path, i, n):
+#: the figure kinds drawn once per variant (the others draw every variant on one axis)
+PER_VARIANT = ("frc", "history", "compare")
+
+
+def suffixed(path, i, n):
+    """The file of variant ``i`` of ``n`` of a per-variant figure: ``path`` itself for one,
+    else ``stem_<i+1>.ext``."""
     if n == 1:
         return path
     stem, ext = os.path.splitext(path)
@@ -40,10 +46,10 @@ def scene_figure(scene_title, d, variants, out_dir):
     target = os.path.join(out_dir, d["file"])
     multi = len(variants) > 1
     title = d.get("title", scene_title)
-    if kind in ("frc", "history", "compare"):
+    if kind in PER_VARIANT:
         written = []
         for i, (label, m, p, s, per, sto, _) in enumerate(variants):
-            path = _suffixed(target, i, len(variants))
+            path = suffixed(target, i, len(variants))
             t = title + (f" ({label})" if label else "")
             if kind == "frc":
                 fig, ax = plt.subplots(figsize=(9, 5))

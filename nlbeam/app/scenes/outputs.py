@@ -26,13 +26,12 @@ def _by_variant(scene, jobs, results):
     for label, m, p, s in scene.variants():
         paths = {k: next((j.path for j in jobs if j.kind == k and j.variant == label), None)
                  for k in ("periodic", "stochastic")}
-        per = results[paths["periodic"]] if paths["periodic"] else None
-        sto = results[paths["stochastic"]] if paths["stochastic"] else None
+        per = results[paths["periodic"]] if paths["periodic"] and results else None
+        sto = results[paths["stochastic"]] if paths["stochastic"] and results else None
         out.append((label, m, p, s, per, sto, paths))
     return out
 
 
-#: which analyses each output reads
 # the header of a table with no rows (e.g. a diagram without bifurcations)
 _EMPTY_COLUMNS = {
     "moments": ["variant", "channel", "mean", "std", "skewness", "kurtosis", "se_mean",
@@ -43,6 +42,7 @@ _EMPTY_COLUMNS = {
     "bifurcations": ["variant", "branch", "order", "kind", "frequency_hz", "frequency_error_hz",
                      "xmax_m", "note"]}
 
+#: which analyses each output reads
 _READS = {"frc": ("periodic",), "bifurcations": ("periodic",), "history": ("stochastic",),
           "psd": ("stochastic",), "pdf": ("stochastic",), "excitation_psd": ("stochastic",),
           "moments": ("stochastic",), "compare": ("periodic", "stochastic"),
@@ -61,6 +61,21 @@ def distinct(kind, variants):
             out.append(v)
     if len(out) == 1:
         out = [("",) + tuple(out[0][1:])]
+    return out
+
+
+def planned_files(scene, jobs, out_dir):
+    """[(kind, path)] of every figure and table file ``write_outputs`` will write (a
+    per-variant figure of several variants: one file each, ``name_1.png``, ...)."""
+    from ..plots.scene import PER_VARIANT, suffixed
+
+    variants = _by_variant(scene, jobs, None)
+    out = []
+    for d in scene.figures:
+        path = os.path.join(out_dir, d["file"])
+        n = len(distinct(d["kind"], variants)) if d["kind"] in PER_VARIANT else 1
+        out += [(f"figure {d['kind']}", suffixed(path, i, n)) for i in range(n)]
+    out += [(f"table {d['kind']}", os.path.join(out_dir, d["file"])) for d in scene.tables]
     return out
 
 

@@ -134,9 +134,11 @@ def _sha256_file(path):
     return h.hexdigest()
 
 
-def entry_record(inputs, path):
-    """The sidecar text of a cache entry: its inputs and the SHA-256 of its result file."""
-    return canonical_json({"inputs": inputs, "result_sha256": _sha256_file(path)}) + "\n"
+def entry_record(inputs, path, warned=()):
+    """The sidecar text of a cache entry: its inputs, the SHA-256 of its result file and the
+    warnings its computation gave (repeated when the entry is reused)."""
+    return canonical_json({"inputs": inputs, "result_sha256": _sha256_file(path),
+                           "warnings": [str(w) for w in warned]}) + "\n"
 
 
 def check_entry(path, inputs, kind):
@@ -191,8 +193,8 @@ def format_plan(scene, jobs, out_dir):
         lines.append(f"          -> {j.path}")
     if not jobs:
         lines.append("  (no analysis needed)")
-    for d in scene.figures:
-        lines.append(f"  write   figure {d['kind']}: {os.path.join(out_dir, d['file'])}")
-    for d in scene.tables:
-        lines.append(f"  write   table {d['kind']}: {os.path.join(out_dir, d['file'])}")
+    from .outputs import planned_files  # (the names a run writes, suffixes included)
+
+    for what, path in planned_files(scene, jobs, out_dir):
+        lines.append(f"  write   {what}: {path}")
     return "\n".join(lines)
