@@ -90,8 +90,8 @@ class Bifurcation(Summary):
     located the point; not an error bar); refine_status: '' (not refined), 'refined' (then
     ``refined`` holds the record, saved and loaded with the diagram, its ``levels`` not) or
     'failed: <reason>' (refine_bifurcations could not, or would not, refine it); xmax (m);
-    order of the branch it lies on; branch index; multipliers (for a grazing point: those of the branch point on the far side of the
-    bracket; None without stability); note: '' for a bifurcation of the smooth map, or 'at
+    order of the branch it lies on; branch index; multipliers (for a grazing point: those of
+    the branch point on the far side of the bracket; None without stability); note: '' for a bifurcation of the smooth map, or 'at
     grazing: multiplier jumps from .. to .. (non-smooth)' where a multiplier jumps through +1,
     -1 or the unit circle at a grazing point (reported there, with the grazing bracket as
     tolerance; see Tracer._detect_step; its error is that of the grazing point)."""
