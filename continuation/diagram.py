@@ -78,23 +78,23 @@ class Branch(Summary):
 @dataclass(repr=False)
 class Bifurcation(Summary):
     """kind: 'fold', 'period-doubling', 'neimark-sacker' or 'grazing' (the number of impacts per
-    period changes: an orbit touches a stop with zero velocity; the flow map is not smooth
-    there and the branch is continued past it by a checked crossing, see frequency_response);
-    frequency (Hz) and value of the continued parameter at the point; error: the estimated
-    error of ``value`` (Hz for a frequency diagram) due to the integration, from the point
-    located again with the step halved (continuation.accuracy.bifurcation_levels; the value is
-    then the finer or extrapolated one; NaN when not estimated: accuracy='off', or the point
-    could not be located at a finer step, which the diagram's warning lists) or from
-    refine_bifurcations; levels: the values at the successive step halvings (not saved);
-    tolerance: width of the tracer's final bracket on the diagram's own branch (where it
-    located the point; not an error bar); refine_status: '' (not refined), 'refined' (then
-    ``refined`` holds the record, saved and loaded with the diagram, its ``levels`` not) or
-    'failed: <reason>' (refine_bifurcations could not, or would not, refine it); xmax (m);
-    order of the branch it lies on; branch index; multipliers (for a grazing point: those of
-    the branch point on the far side of the bracket; None without stability); note: '' for a bifurcation of the smooth map, or 'at
-    grazing: multiplier jumps from .. to .. (non-smooth)' where a multiplier jumps through +1,
-    -1 or the unit circle at a grazing point (reported there, with the grazing bracket as
-    tolerance; see Tracer._detect_step; its error is that of the grazing point)."""
+    period changes: an orbit touches a stop with zero velocity; the flow map is not smooth there
+    and the branch is continued past it by a checked crossing, see frequency_response);
+    frequency (Hz) and value of the continued parameter at the point; error: the estimated error
+    of ``value`` (Hz for a frequency diagram) due to the integration, from the point located
+    again with the step halved (continuation.accuracy.bifurcation_levels; the value is then the
+    finer or extrapolated one; NaN when not estimated: accuracy='off', or the point could not be
+    located at a finer step, which the diagram's warning lists) or from refine_bifurcations;
+    levels: the values at the successive step halvings (not saved); tolerance: width of the
+    tracer's final bracket on the diagram's own branch (where it located the point; not an error
+    bar); refine_status: '' (not refined), 'refined' (then ``refined`` holds the record, saved
+    and loaded with the diagram, its ``levels`` not) or 'failed: <reason>' (refine_bifurcations
+    could not, or would not, refine it); xmax (m); order of the branch it lies on; branch index;
+    multipliers (for a grazing point: those of the branch point on the far side of the bracket;
+    None without stability); note: '' for a bifurcation of the smooth map, or 'at grazing:
+    multiplier jumps from .. to .. (non-smooth)' where a multiplier jumps through +1, -1 or the
+    unit circle at a grazing point (reported there, with the grazing bracket as tolerance; see
+    Tracer._detect_step; its error is that of the grazing point)."""
 
     kind: str
     frequency: float
