@@ -14,7 +14,7 @@ from ..files import write_text_atomic
 from ..plots.scene import scene_figure
 from .bifurcation_list import bifurcation_rows
 from .numbers import with_error
-from .schema import build_noise, default_f_max
+from .schema import build_model, default_f_max, excitation_for_peaks
 
 __all__ = ["write_outputs", "write_table", "distinct"]
 
@@ -83,23 +83,36 @@ def write_outputs(scene, jobs, results, out_dir, log):
     """Write every figure and table of ``scene`` from ``results`` (cache path -> result) to
     ``out_dir``; log each file. Returns the files written."""
     variants = _by_variant(scene, jobs, results)
+    measured = None
+    if scene.measured is not None:
+        from .measured import measured_result
+
+        measured = (scene.measured["label"],
+                    measured_result(scene.measured, dict(build_model(scene.model).parameters())))
     files = []
     for d in scene.figures:
-        files += scene_figure(scene.title, d, distinct(d["kind"], variants), out_dir)
+        files += scene_figure(scene.title, d, distinct(d["kind"], variants), out_dir,
+                              measured=measured)
     for d in scene.tables:
-        files.append(write_table(d, variants, out_dir))
+        files.append(write_table(d, variants, out_dir, measured=measured))
     for f in files:
         log(f"nlbeam: wrote {f}")
     return files
 
 
-def write_table(d, variants, out_dir):
+def write_table(d, variants, out_dir, measured=None):
     """Write the CSV table of one [[table]] entry ``d`` (moments, peaks or bifurcations) over
-    the variants it distinguishes. Returns its path."""
+    the variants it distinguishes, and for moments and peaks the ``measured`` record (label,
+    StochasticResult) if it has the channel (its peaks mapped to the first variant's diagram).
+    Returns its path."""
     kind = d["kind"]
     ch = d.get("channel", defaults.CHANNEL)
     rows = []
-    for label, m, p, s, per, sto, _ in distinct(kind, variants):
+    todo = distinct(kind, variants)
+    if measured is not None and kind in ("moments", "peaks") and ch in measured[1].channels:
+        label0, m0, p0, s0, per0 = todo[0][:5]
+        todo = todo + [(measured[0], m0, p0, s0, per0, measured[1], None)]
+    for label, m, p, s, per, sto, _ in todo:
         if kind == "moments":
             mo = sto.moments(ch)
             row = {"variant": label, "channel": ch,
@@ -115,7 +128,8 @@ def write_table(d, variants, out_dir):
             rows.append(row)
         elif kind == "peaks":
             f_max = d.get("f_max", default_f_max(p, s))
-            for pk in map_peaks(sto.psd(ch), per, build_noise(s), f_range=(0.0, f_max)):
+            for pk in map_peaks(sto.psd(ch), per, excitation_for_peaks(s),
+                                f_range=(0.0, f_max)):
                 row = pk.as_row()
                 if not d.get("stability", True):
                     row["stable"] = ""  # not asked for (and not computed when supported)

@@ -118,8 +118,10 @@ def plan(scene, out_dir):
             inputs = {"analysis": "stochastic", "model": m, "stochastic": s,
                       "channels": channels, "outputs": outputs, "history": hist,
                       "code": code_fingerprint()}
+            under = (f"the record {os.path.basename(s['record'])} ({s['record_column']})"
+                     if "record" in s else f"band {s['band'][0]:g}-{s['band'][1]:g} Hz")
             jobs.append(_job("stochastic", label, inputs, cache,
-                             f"{s['duration']:g} s under band {s['band'][0]:g}-{s['band'][1]:g} Hz"
+                             f"{s['duration']:g} s under {under}"
                              f"{', low-pass %g Hz' % s['lowpass'] if s.get('lowpass') else ''}, "
                              f"seed {s['seed']}, channels {channels}, outputs {outputs}"
                              f"{', history %s s' % hist if hist else ''}"))
