@@ -193,7 +193,49 @@ def test_every_figure_kind_draws_into_ax_and_closes_what_it_saves(result, tmp_pa
         got = draw(axes, tmp_path / f"{name}_given.png")
         assert plt.fignum_exists(fig0.number), name  # the caller's figure stays open
         plt.close(fig0)
+        fig = draw(None, None)
+        _promised(name, kind, fig)
+        plt.close(fig)
         path = tmp_path / f"{name}.png"
         fig = draw(None, path)
         assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
         assert not plt.fignum_exists(fig.number) and plt.get_fignums() == [], name
+
+
+def _promised(name, kind, fig):
+    """The labels, units and limits each figure kind promises, read back from matplotlib."""
+    ax = fig.axes[0]
+    y_unit = "m" if kind == "base" else "N"
+    if name == "frc":
+        assert ax.get_xlabel() == "excitation frequency [Hz]"
+        assert ax.get_ylabel().endswith("[mm]") and ax.get_xlim() == (30.0, 60.0)
+        assert ("base amplitude 0.1 mm" if kind == "base" else "force amplitude 2 N") \
+            in ax.get_title()
+        texts = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert "stable (solid)" in texts and "unstable (dashed)" in texts
+    elif name == "compare":
+        assert ax.get_ylabel() == "PSD of delta [m$^2$/Hz]" and ax.get_xlim() == (0.0, 120.0)
+        assert fig.axes[1].get_xlabel() == "response frequency [Hz]"
+        assert fig.axes[1].get_ylabel() == "|x|max [mm]"
+    elif name == "excitation_psd":
+        assert ax.get_ylabel() == f"PSD of y [{y_unit}$^2$/Hz]"
+        assert ax.get_xlabel() == "frequency [Hz]" and ax.get_xlim() == (0.0, 2 * BAND[1])
+    elif name == "response_psd":
+        assert ax.get_ylabel() == "PSD of delta [m$^2$/Hz]"
+        assert ax.get_xlim() == (0.0, 2 * BAND[1])
+        lo, hi = ax.get_ylim()
+        assert 0 < lo and hi / lo <= 3e8  # at most 8 decades and a half: no leakage floor
+    elif name == "pdf":
+        assert (ax.get_xlabel(), ax.get_ylabel()) == ("x [mm]", "probability density [1/mm]")
+    elif name == "history":
+        assert ax.get_xlabel() == "t after the transient [s]" and ax.get_ylabel() == "x [mm]"
+        assert ax.get_xlim() == pytest.approx((1.0, 1.5))  # keep_history=(1.0, 1.5)
+    elif name == "channel_psds":
+        assert fig.axes[-1].get_xlabel() == "frequency [Hz]"
+        assert [a.get_ylabel() for a in fig.axes] == [
+            f"PSD of {c} [{u}$^2$/Hz]" for c, u in (("delta", "m"), ("x", "m"), ("y", y_unit),
+                                                    ("force", "N"))]
+    else:
+        assert (ax.get_xlabel(), ax.get_ylabel()) == ("indentation delta [um]",
+                                                      "contact force F [N]")
+        assert ax.get_xlim()[0] == 0.0
