@@ -239,3 +239,15 @@ def _promised(name, kind, fig):
         assert (ax.get_xlabel(), ax.get_ylabel()) == ("indentation delta [um]",
                                                       "contact force F [N]")
         assert ax.get_xlim()[0] == 0.0
+
+
+def test_sweep_labels_in_the_units_of_the_axes():
+    """A sweep's legend says 'rms = 0.025 mm' on mm axes, not 'rms=2.5e-05' (issue 16)."""
+    import nlbeam.app.scenes  # noqa: F401  (the scene figures import the scene schema)
+    from nlbeam.app.plots.scene import variant_label
+
+    assert variant_label("rms=2.5e-05") == "rms = 0.025 mm"
+    assert variant_label("amplitude=0.0001") == "amplitude = 0.1 mm"
+    assert variant_label("rms=0.5", "force") == "rms = 0.5 N"
+    assert variant_label("band=78-98") == "band = 78-98 Hz"
+    assert variant_label("seed=3") == "seed=3" and variant_label("") == ""

@@ -115,3 +115,22 @@ def test_the_cache_follows_the_record_and_bad_files_are_named(folder, tmp_path):
     (d / "bad2.toml").write_text(SCENE.replace('"rig.csv"', '"nowhere.csv"'))
     with pytest.raises(SceneError, match=r"measured.file: nowhere.csv: no such file"):
         load_scene(d / "bad2.toml")
+
+
+def test_measured_peaks_join_the_comparison(folder, tmp_path):
+    """The measured record's PSD peaks are mapped onto the diagram like the simulation's and
+    listed under its label; the comparison figure is drawn with it."""
+    d = tmp_path
+    for f in ("base.csv", "rig.csv"):
+        (d / f).write_bytes((folder / f).read_bytes())
+    (d / "scene.toml").write_text(
+        SCENE + '[periodic]\namplitude = 1e-4\nf_range = [40.0, 48.0]\norders = [1]\n'
+        'n_grid = 3\n[[figure]]\nkind = "compare"\nfile = "compare.png"\nf_max = 100.0\n'
+        '[[table]]\nkind = "peaks"\nfile = "peaks.csv"\nf_max = 100.0\n')
+    run_scene(d / "scene.toml", d / "out", quiet=True)
+    with open(d / "out" / "peaks.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    sim = [(r["frequency_hz"], r["kind"]) for r in rows if r["variant"] == ""]
+    rig = [(r["frequency_hz"], r["kind"]) for r in rows if r["variant"] == "rig"]
+    assert sim and rig == sim  # the same record: the same peaks, the same explanations
+    assert (d / "out" / "compare.png").stat().st_size > 5000

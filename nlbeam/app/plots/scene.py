@@ -18,11 +18,33 @@ from .frequency_response import plot_frequency_response
 from .stochastic import TIME_LABEL, kept_time
 from .units import axis_label, channel_unit, excitation_kind, log_limits, psd_label
 
-__all__ = ["scene_figure", "suffixed", "PER_VARIANT"]
+__all__ = ["scene_figure", "suffixed", "variant_label", "PER_VARIANT"]
 
 
 #: the figure kinds drawn once per variant (the others draw every variant on one axis)
 PER_VARIANT = ("frc", "history", "compare")
+
+
+#: a swept parameter's unit as drawn: (unit, factor SI -> drawn)
+_SWEEP_UNITS = {"rms": ("mm", 1e3), "amplitude": ("mm", 1e3), "band": ("Hz", 1.0),
+                "lowpass": ("Hz", 1.0), "K_hertz": ("N/m^1.5", 1.0)}
+
+
+def variant_label(label, kind="base"):
+    """A sweep variant's label ('rms=2.5e-05') in the units of the axes ('rms = 0.025 mm';
+    under force excitation rms and amplitude are forces, N)."""
+    name, sep, value = str(label).partition("=")
+    if not sep or name not in _SWEEP_UNITS:
+        return label
+    unit, factor = _SWEEP_UNITS[name]
+    if kind == "force" and name in ("rms", "amplitude"):
+        unit, factor = "N", 1.0
+    try:
+        parts = [f"{float(v) * factor:g}" for v in (value.split("-") if name == "band"
+                                                    else [value])]
+    except ValueError:
+        return label
+    return f"{name} = {'-'.join(parts)} {unit}"
 
 
 def suffixed(path, i, n):
@@ -53,7 +75,9 @@ def scene_figure(scene_title, d, variants, out_dir, measured=None):
         written = []
         for i, (label, m, p, s, per, sto, _) in enumerate(variants):
             path = suffixed(target, i, len(variants))
-            t = title + (f" ({label})" if label else "")
+            res = sto if sto is not None else per
+            kind_e = excitation_kind(getattr(res, "model_parameters", {}))
+            t = title + (f" ({variant_label(label, kind_e)})" if label else "")
             if kind == "frc":
                 fig, ax = plt.subplots(figsize=(9, 5))
                 plot_frequency_response(per, ax)
@@ -91,7 +115,8 @@ def scene_figure(scene_title, d, variants, out_dir, measured=None):
         return written
     fig, ax = plt.subplots(figsize=(8, 5))
     ekind = excitation_kind(variants[0][5].model_parameters)
-    runs = [(label, s, sto) for label, m, p, s, per, sto, _ in variants]
+    runs = [(variant_label(label, ekind) if label else label, s, sto)
+            for label, m, p, s, per, sto, _ in variants]
     s0 = variants[0][3]
     if measured is not None:  # drawn last, in black, where it has the channel
         want = "y" if kind == "excitation_psd" else ch
@@ -126,11 +151,12 @@ def scene_figure(scene_title, d, variants, out_dir, measured=None):
             ax.semilogy(x * sc, dens / sc, lw=1.0, color=colour, ls=ls,
                         label=f"{ch}{' ' + label if label else ''}: skew {mo['skewness']:.2f}, "
                               f"kurt {mo['kurtosis']:.2f}")
-            if k == 0:
+            if s is not None:  # each simulated curve's Gaussian, in its colour, dotted
                 g = (np.exp(-0.5 * ((x - mo["mean"]) / mo["std"]) ** 2)
                      / (mo["std"] * math.sqrt(2 * math.pi)))
-                ax.semilogy(x * sc, g / sc, ":", color="0.45", lw=1.0,
-                            label="Gaussian, same mean and std")
+                ax.semilogy(x * sc, g / sc, ":", color=colour, lw=1.0,
+                            label="dotted: Gaussian of the same mean and std" if k == 0
+                            else None)
             ax.set_xlabel(axis_label(ch, unit))
             ax.set_ylabel(axis_label("probability density", f"1/{unit}"))
             drawn.append(dens / sc)
