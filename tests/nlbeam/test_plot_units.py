@@ -253,3 +253,25 @@ def test_sweep_labels_in_the_units_of_the_axes():
     assert variant_label("rms=0.5", "force") == "rms = 0.5 N"
     assert variant_label("band=78-98") == "band = 78-98 Hz"
     assert variant_label("seed=3") == "seed=3" and variant_label("") == ""
+
+
+def test_comparison_legend_lists_only_drawn_peaks_and_labels_stay_inside(result):
+    """A peak beyond f_max gets no legend entry; a label at the low-frequency edge does not
+    cross the y axis (issue 16)."""
+    from nlbeam.app.compare import PeakMatch
+    from nlbeam.app.plots.compare import plot_comparison
+
+    kind, res = result
+    f, P = res.psd("delta")
+    far = PeakMatch(1016.0, 1.0, "unexplained", 0, float("nan"), None, float("nan"),
+                    psd=float(P.max()))
+    low = PeakMatch(1.0, 1.0, "asymmetry", 0, float("nan"), None, float("nan"),
+                    psd=float(P.max()))
+    fig = plot_comparison((f, P), _small_diagram(kind), [far, low], f_max=120.0)
+    ax = fig.axes[0]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "unexplained" not in labels and "asymmetry" in labels
+    fig.canvas.draw()
+    (text,) = [t for t in ax.texts if t.get_text() == "asym"]
+    assert text.get_window_extent().x0 >= ax.get_window_extent().x0
+    plt.close(fig)

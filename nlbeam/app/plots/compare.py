@@ -54,6 +54,8 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
         for lo, hi in holds.bands:
             ax1.axvspan(lo, max(hi, lo + 1e-9), color="0.9", zorder=0,
                         label="excitation band" if (lo, hi) == holds.bands[0] else None)
+    hi = f_max if f_max is not None else float(f[-1])
+    matches = [m for m in matches if m.frequency <= hi]  # no legend entry for a peak not drawn
     seen = set()
     for m in matches:
         c = _KIND_COLOUR[m.kind]
@@ -66,8 +68,10 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
             txt = "1 forced"
         elif m.note == "multiple":
             txt = f"{m.order}\u00d7{m.explained_by:.4g}"
-        ax1.annotate(txt, (m.frequency, m.psd), textcoords="offset points", xytext=(0, 6),
-                     ha="center", fontsize=8, color=c)
+        near_axis = m.frequency < 0.04 * hi  # centred there, the text crosses the y axis
+        ax1.annotate(txt, (m.frequency, m.psd), textcoords="offset points",
+                     xytext=(3 if near_axis else 0, 6), ha="left" if near_axis else "center",
+                     fontsize=8, color=c)
         for ax in (ax1, ax2):
             ax.axvline(m.frequency, color=c, lw=0.6, ls=":")
     shown = pos & (f <= (f_max if f_max is not None else np.inf))  # y range from what is seen
@@ -110,7 +114,6 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
     ax2.set_xlabel("response frequency [Hz]")
     ax2.set_ylabel("|x|max [mm]")
     ax2.legend(fontsize=8, loc="upper right")
-    hi = f_max if f_max is not None else float(f[-1])
     ax1.set_xlim(0.0, hi)
     ax1.set_title("stochastic response peaks and the periodic diagram")
     if ax is None:
