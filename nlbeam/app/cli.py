@@ -284,6 +284,7 @@ def _parser():
 
     from .defaults import (CHANNEL, DEMO_DURATION, DEMO_WORKERS, MIN_PROMINENCE, MODEL,
                            PERIODIC, SIMULATE_CHANNELS, STOCHASTIC)
+    from .demo import demo_summary
 
     per, sto = PERIODIC, STOCHASTIC
     common = argparse.ArgumentParser(add_help=False)
@@ -303,11 +304,9 @@ def _parser():
     p = sub.add_parser("demo", parents=[common], help="a short version of `nlbeam figures`: "
                        "every kind of figure and table on a small diagram and 10 s records "
                        f"({DEMO_DURATION} once the kernels are compiled)",
-                       description="Write a small scene (OUT/demo.toml) and run it: the "
-                       "frequency-response diagram 30-100 Hz (orders 1, 2), broad-band (0-200 Hz) "
-                       "and narrow-band (78-98 Hz) base noise of rms 0.1 mm, PSDs, PDF, time "
-                       "history, the comparison and the tables. Cached like any scene: a second "
-                       "run takes seconds. " + _UNITS)
+                       description="Write a small scene (OUT/demo.toml) and run it: "
+                       f"{demo_summary()}; PSDs, PDF, time history, the comparison and the "
+                       "tables. Cached like any scene: a second run takes seconds. " + _UNITS)
     p.add_argument("--out", default="nlbeam-demo",
                    help="output folder (scene, figures, tables, cache), default ./nlbeam-demo")
     p.add_argument("--dry-run", action="store_true",
