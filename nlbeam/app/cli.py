@@ -481,7 +481,10 @@ def main(argv=None):
         args.quiet = False
     def show(message, category, filename, lineno, file=None, line=None):
         # a warning (accuracy, a branch that ended early, a record that gained energy) is one
-        # line on stderr, --quiet or not: it says what to change
+        # line on stderr, --quiet or not: it says what to change (a bar's line ended first)
+        from .progress import end_bar_line
+
+        end_bar_line()
         print(f"nlbeam {args.command}: warning: {str(message).strip()}", file=sys.stderr,
               flush=True)
 

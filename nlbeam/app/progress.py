@@ -12,10 +12,19 @@ from __future__ import annotations
 import sys
 import time
 
-__all__ = ["Progress", "PLAIN_EVERY", "BAR_WIDTH"]
+__all__ = ["Progress", "end_bar_line", "PLAIN_EVERY", "BAR_WIDTH"]
 
 PLAIN_EVERY = 5.0  # s between plain progress lines of one bar
 BAR_WIDTH = 24  # characters of the bar
+
+
+_DRAWING = []  # the Progress whose bar is on the terminal's current line, if any
+
+
+def end_bar_line():
+    """End a bar's terminal line before other output (a warning) is printed."""
+    if _DRAWING:
+        _DRAWING[0].close()
 
 
 class Progress:
@@ -59,6 +68,7 @@ class Progress:
                               f"{amount} ({100 * frac:.0f} %)\x1b[K")
             self.stream.flush()
             self._open = True
+            _DRAWING[:] = [self]
             if frac >= 1.0:
                 self._close_bar()
             return
@@ -72,6 +82,8 @@ class Progress:
             self.stream.write("\n")
             self.stream.flush()
             self._open = False
+            if _DRAWING and _DRAWING[0] is self:
+                _DRAWING.clear()
 
     def close(self):
         """End a bar left open (call before other output)."""

@@ -347,3 +347,10 @@ def test_progress_lines_when_not_a_terminal(tmp_path):
     p.bar("sim", 0.5, 2.0, "s")
     p.bar("sim", 2.0, 2.0, "s")
     assert bar.getvalue().count("\r") == 2 and bar.getvalue().endswith("(100 %)\x1b[K\n")
+    # a warning printed while a bar is drawn starts on its own line
+    from nlbeam.app.progress import end_bar_line
+    bar = io.StringIO()
+    p = Progress(stream=bar, tty=True)
+    p.bar("sim", 0.5, 2.0, "s")
+    end_bar_line()
+    assert bar.getvalue().endswith("(25 %)\x1b[K\n")
