@@ -200,10 +200,16 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
     for j in {j.path: j for j in jobs if j.problem}.values():
         log(f"nlbeam: warning: cache entry {j.path}: {j.problem}; recomputing it")
     todo = list({j.path: j for j in jobs if not j.cached}.values())  # equal keys: once
-    for j in {j.path: j for j in jobs if j.cached}.values():  # as when first computed
+    shared = {}
+    for j in jobs:
+        if j.cached:
+            shared.setdefault(j.path, []).append(j)
+    for same in shared.values():  # as when first computed; a shared analysis names no variant
+        j = same[0]
+        name = j.kind + (f" {j.variant}" if j.variant and len(same) == 1 else "")
         for text in cached_warnings(j):
-            warnings.warn(f"(cached {j.kind}{' ' + j.variant if j.variant else ''}, as first "
-                          f"computed) {text}", CachedResultWarning, stacklevel=2)
+            warnings.warn(f"(cached {name}, as first computed) {text}", CachedResultWarning,
+                          stacklevel=2)
     if todo:
         title = scene.title if scene.title.startswith("nlbeam") else f"nlbeam: {scene.title}"
         log(f"{title}: computing {len(todo)} of {len(jobs)} analyses")
