@@ -136,11 +136,11 @@ def scene_figure(scene_title, d, variants, out_dir, measured=None):
                             label if s is None else "simulated y" + (f" ({label})" if label
                                                                      else "")))
             drawn.append(P[(f <= fmax) & (P > 0)])
-            if kind == "excitation_psd" and s is not None and k == 0:
+            if kind == "excitation_psd" and s is not None:
                 exc = build_noise(s)
                 if hasattr(exc, "psd"):  # a noise: its target (a measured record has none)
-                    ax.semilogy(f[f > 0], exc.psd(f[f > 0]), "k--", lw=1.0,
-                                label="target G(f)")
+                    ax.semilogy(f[f > 0], exc.psd(f[f > 0]), "--", color=colour, lw=1.0,
+                                label="target G(f)" + (f" ({label})" if label else ""))
             ax.set_xlabel(axis_label("frequency", "Hz"))
             ax.set_ylabel(psd_label(c, ekind))
             ax.set_xlim(0, fmax)

@@ -137,13 +137,12 @@ def _reissued(outs, names):
     return outs
 
 
-def _run_parallel(todo, workers, scheduler, show, quiet):
+def _run_parallel(todo, workers, scheduler, show, quiet, name_of):
     """[(result, warnings)] of the jobs ``todo`` on a process pool or Dask (run_jobs), the
     workers' progress (per branch, per simulated block) relayed to ``show`` through a
     manager queue (local pool only: a Dask worker reports per analysis)."""
     items = [dict(j.inputs) for j in todo]
-    names = [f"[{k}/{len(todo)}] {j.kind}{' ' + j.variant if j.variant else ''}"
-             for k, j in enumerate(todo, start=1)]
+    names = [f"[{k}/{len(todo)}] {name_of(j)}" for k, j in enumerate(todo, start=1)]
 
     def prog(done, total):
         show.bar("nlbeam: analyses done", done, total)
@@ -200,13 +199,15 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
     for j in {j.path: j for j in jobs if j.problem}.values():
         log(f"nlbeam: warning: cache entry {j.path}: {j.problem}; recomputing it")
     todo = list({j.path: j for j in jobs if not j.cached}.values())  # equal keys: once
-    shared = {}
+    sharing = {}
     for j in jobs:
-        if j.cached:
-            shared.setdefault(j.path, []).append(j)
-    for same in shared.values():  # as when first computed; a shared analysis names no variant
-        j = same[0]
-        name = j.kind + (f" {j.variant}" if j.variant and len(same) == 1 else "")
+        sharing[j.path] = sharing.get(j.path, 0) + 1
+
+    def name_of(j):  # an analysis several variants share names no variant
+        return j.kind + (f" {j.variant}" if j.variant and sharing[j.path] == 1 else "")
+
+    for j in {j.path: j for j in jobs if j.cached}.values():  # as when first computed
+        name = name_of(j)
         for text in cached_warnings(j):
             warnings.warn(f"(cached {name}, as first computed) {text}", CachedResultWarning,
                           stacklevel=2)
@@ -220,14 +221,13 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
         scene.sweep is not None and len(todo) > 1 and min(w or os.cpu_count() or 1,
                                                           len(todo)) > 1)
     if parallel:
-        outs = _run_parallel(todo, w, scheduler, show, quiet)
+        outs = _run_parallel(todo, w, scheduler, show, quiet, name_of)
         for j, (r, warned) in zip(todo, outs):
             store_result(j, r, log, warned)
             results[j.path] = r
     else:
         for n, j in enumerate(todo, start=1):
-            name = f"{j.kind}{' ' + j.variant if j.variant else ''}"
-            log(f"nlbeam: [{n}/{len(todo)}] {name}: {j.description}")
+            log(f"nlbeam: [{n}/{len(todo)}] {name_of(j)}: {j.description}")
             inputs = dict(j.inputs)
             if j.kind == "stochastic" and not quiet:
                 inputs["_progress"] = (lambda done, total, n=n: show.bar(
