@@ -112,6 +112,10 @@ def test_the_cache_follows_the_record_and_bad_files_are_named(folder, tmp_path):
     with pytest.raises(SceneError, match=r"bad.toml:4: stochastic.record: base.csv: no column "
                                          r"'yb'; the file has 't', 'y'"):
         load_scene(d / "bad.toml")
+    (d / "long.toml").write_text(SCENE.replace("duration = 3.0", "duration = 30.0"))
+    with pytest.raises(SceneError, match=r"long.toml:5: stochastic.duration: transient \+ "
+                                         r"duration = 30.5 s exceed the record base.csv"):
+        load_scene(d / "long.toml")
     (d / "bad2.toml").write_text(SCENE.replace('"rig.csv"', '"nowhere.csv"'))
     with pytest.raises(SceneError, match=r"measured.file: nowhere.csv: no such file"):
         load_scene(d / "bad2.toml")

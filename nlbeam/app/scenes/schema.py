@@ -459,6 +459,13 @@ def _record(scene_path, s, fail):
                                                                              "y")}
     out["record"] = _columns_file(scene_path, s["record"], ("stochastic", "record"),
                                   (out["record_time"], out["record_column"]), fail)
+    from ..files.columns import read_columns
+
+    t = read_columns(out["record"])[out["record_time"]]
+    need = s["duration"] + (s["transient"] or 0.0)  # (a default transient: checked by simulate)
+    if t.size < 2 or t[-1] - t[0] < need * (1 - 1e-9):
+        fail(("stochastic", "duration"), f"transient + duration = {need:g} s exceed the record "
+             f"{s['record']} ({t[-1] - t[0] if t.size else 0:g} s long)", s["duration"])
     with open(out["record"], "rb") as fh:
         out["record_sha256"] = hashlib.sha256(fh.read()).hexdigest()
     return out
