@@ -9,6 +9,7 @@ import numpy as np
 
 import nlbeam
 from nlbeam.solver import period_step
+from nlbeam.summary import Summary, describe_value
 
 from ._newton import ContinuationWarning, ConvergenceError
 from .pathfollow import Tracer
@@ -17,8 +18,8 @@ from .shooting import (Integrator, ShootingProblem, _problem_from_state, forcing
                        steady_state)
 
 
-@dataclass
-class Branch:
+@dataclass(repr=False)
+class Branch(Summary):
     """One traced branch (n points). order: period = order / f. parameter: the continued
     parameter's name, values (n,) its values; frequency (n,) Hz, amplitude (n,); xmax (n,) m;
     stable (n,) bool; multipliers (n, 2N) complex (largest modulus first), both None when the
@@ -59,25 +60,41 @@ class Branch:
     multipliers_error: np.ndarray | None = None
     error_sampled: np.ndarray | None = None
 
+    def _summary_rows(self):
+        n = len(self.values)
+        rows = [("order", str(self.order)), ("points", str(n))]
+        if self.parameter != "frequency":
+            rows.append((self.parameter, describe_value(np.asarray(self.values))))
+        rows += [("frequency [Hz]", describe_value(np.asarray(self.frequency))),
+                ("xmax [m]", describe_value(np.asarray(self.xmax))),
+                ("stable", "not computed" if self.stable is None
+                 else f"{int(np.count_nonzero(self.stable))} of {n} points"),
+                ("origin", self.origin), ("ends", " / ".join(e or "?" for e in self.ends))]
+        if self.xmax_error is not None:
+            rows.append(("xmax_error [m]", describe_value(np.asarray(self.xmax_error))))
+        return rows
 
-@dataclass
-class Bifurcation:
+
+@dataclass(repr=False)
+class Bifurcation(Summary):
     """kind: 'fold', 'period-doubling', 'neimark-sacker' or 'grazing' (the number of impacts per
-    period changes: an orbit touches a stop with zero velocity; the flow map is not smooth
-    there and the branch is continued past it by a checked crossing, see frequency_response);
-    frequency (Hz) and value of the continued parameter at the point; error: the estimated
-    error of ``value`` (Hz for a frequency diagram) due to the integration, from the point
-    located again with the step halved (continuation.accuracy.bifurcation_levels; the value is
-    then the finer or extrapolated one; NaN when not estimated: accuracy='off', or the point
-    could not be located at a finer step, which the diagram's warning lists) or from
-    refine_bifurcations; levels: the values at the successive step halvings (not saved);
-    tolerance: width of the tracer's final bracket on the diagram's own branch (where it
-    located the point; not an error bar); xmax (m); order of the branch it lies on; branch
-    index; multipliers (for a grazing point: those of the branch point on the far side of the
-    bracket; None without stability); note: '' for a bifurcation of the smooth map, or 'at
-    grazing: multiplier jumps from .. to .. (non-smooth)' where a multiplier jumps through +1,
-    -1 or the unit circle at a grazing point (reported there, with the grazing bracket as
-    tolerance; see Tracer._detect_step; its error is that of the grazing point)."""
+    period changes: an orbit touches a stop with zero velocity; the flow map is not smooth there
+    and the branch is continued past it by a checked crossing, see frequency_response);
+    frequency (Hz) and value of the continued parameter at the point; error: the estimated error
+    of ``value`` (Hz for a frequency diagram) due to the integration, from the point located
+    again with the step halved (continuation.accuracy.bifurcation_levels; the value is then the
+    finer or extrapolated one; NaN when not estimated: accuracy='off', or the point could not be
+    located at a finer step, which the diagram's warning lists) or from refine_bifurcations;
+    levels: the values at the successive step halvings (not saved); tolerance: width of the
+    tracer's final bracket on the diagram's own branch (where it located the point; not an error
+    bar); refine_status: '' (not refined), 'refined' (then ``refined`` holds the record, saved
+    and loaded with the diagram, its ``levels`` not) or 'failed: <reason>' (refine_bifurcations
+    could not, or would not, refine it); xmax (m); order of the branch it lies on; branch index;
+    multipliers (for a grazing point: those of the branch point on the far side of the bracket;
+    None without stability); note: '' for a bifurcation of the smooth map, or 'at grazing:
+    multiplier jumps from .. to .. (non-smooth)' where a multiplier jumps through +1, -1 or the
+    unit circle at a grazing point (reported there, with the grazing bracket as tolerance; see
+    Tracer._detect_step; its error is that of the grazing point)."""
 
     kind: str
     frequency: float
@@ -95,15 +112,30 @@ class Bifurcation:
     # impacts within the bracket' where k close ones were merged (Tracer steps may or may not
     # resolve them one by one)
     levels: np.ndarray | None = None
+    refine_status: str = ""  # '' not refined, 'refined', or 'failed: <reason>' (saved)
 
     @property
     def smooth(self):
         """False for a bifurcation at a grazing point (a multiplier jumps there)."""
         return not self.note.startswith("at grazing")
 
+    def _summary_rows(self):
+        rows = [("kind", self.kind), ("order", str(self.order)), ("branch", str(self.branch)),
+                ("frequency [Hz]", f"{self.frequency:.10g}"),
+                ("error [Hz]", "not estimated" if not np.isfinite(self.error)
+                 else f"{self.error:.2g}"),
+                ("bracket (tolerance) [Hz]", f"{self.tolerance:.2g}"),
+                ("xmax [m]", describe_value(self.xmax)),
+                ("refinement", self.refine_status or "not refined")]
+        if self.multipliers is not None:
+            rows.append(("multipliers", describe_value(np.asarray(self.multipliers))))
+        if self.note:
+            rows.append(("note", describe_value(self.note)))
+        return rows
 
-@dataclass
-class Superharmonic:
+
+@dataclass(repr=False)
+class Superharmonic(Summary):
     """A superharmonic resonance: a peak of the harmonic branch at frequency (Hz, +- tolerance)
     where ``harmonic`` times f lies near the main resonance; ratio: amplitude of that harmonic
     over the first in the response relative to the base."""
@@ -116,8 +148,8 @@ class Superharmonic:
     tolerance: float = float("nan")
 
 
-@dataclass
-class FrequencyResponse:
+@dataclass(repr=False)
+class FrequencyResponse(Summary):
     """A diagram: branches, bifurcations and superharmonic peaks, with what produced them."""
 
     model_parameters: dict
@@ -137,6 +169,34 @@ class FrequencyResponse:
         branch that ran onto another counts as joined to it)."""
         return _uncovered(_intervals([b for b in self.branches if b.order == order]),
                           min(self.p_range), max(self.p_range))
+
+    def _summary_rows(self):
+        from collections import Counter
+
+        unit = "Hz" if self.parameter == "frequency" else ""
+        lo, hi = sorted(float(v) for v in self.p_range)
+        orders = Counter(int(b.order) for b in self.branches)
+        kinds = Counter(b.kind for b in self.bifurcations)
+        status = Counter((b.refine_status or "").split(":")[0] for b in self.bifurcations)
+        rows = [(self.parameter, f"{lo:g} .. {hi:g} {unit}".rstrip()),
+                ("amplitude", f"{self.amplitude:.6g} " + (
+                    "N" if self.model_parameters.get("excitation_kind") == "force"
+                    or self.model_parameters.get("model") == "Duffing" else "m")),
+                ("branches", f"{len(self.branches)}" + (": " + ", ".join(
+                    f"order {o}: {k}" for o, k in sorted(orders.items())) if orders else "")),
+                ("points", str(self.n_points or sum(len(b.values) for b in self.branches))),
+                ("bifurcations", f"{len(self.bifurcations)}" + (": " + ", ".join(
+                    f"{k} {n}" for k, n in sorted(kinds.items())) if kinds else ""))]
+        if status.get("refined") or status.get("failed"):
+            rows.append(("refined", f"{status.get('refined', 0)} refined, "
+                                    f"{status.get('failed', 0)} failed"))
+        rows.append(("superharmonics", str(len(self.superharmonics))))
+        if any(b.order == 1 for b in self.branches):
+            gaps = self.uncovered(1)
+            rows.append(("order 1 uncovered", "none" if not gaps else ", ".join(
+                f"{a:g}..{b:g}" for a, b in gaps)))
+        rows += [("wall_time [s]", f"{self.wall_time:.3g}"), ("version", str(self.version))]
+        return rows
 
     def save(self, path):
         """Write to HDF5 (atomically: a temporary file in the same folder, then os.replace;

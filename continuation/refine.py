@@ -18,6 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nlbeam.summary import Summary
+
 from ._newton import ConvergenceError
 from .shooting import Integrator, _problem_from_state
 
@@ -29,8 +31,8 @@ LEVELS = tuple(Integrator(dt_scale=s, steps_per_contact=32 / s) for s in
                (1 / 4, 1 / 8, 1 / 16, 1 / 32))
 
 
-@dataclass
-class Refined:
+@dataclass(repr=False)
+class Refined(Summary):
     """A fold or period doubling located at several integrator settings.
 
     values (k,): the parameter value (Hz for frequency) at each of ``levels`` (Integrators,
@@ -209,7 +211,8 @@ def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders
     extrapolated value and ``error`` its error estimate (Refined.tolerance; ``tolerance`` stays
     the diagram's bracket). Bifurcations whose extended system does not converge, and those at
     a grazing point (``Bifurcation.smooth`` False), keep their values and errors and get
-    ``refined = None``. Returns the list of (bifurcation, Refined or the error)."""
+    ``refined = None``; ``refine_status`` says which ('refined' or 'failed: <reason>'; both
+    saved with the diagram). Returns the list of (bifurcation, Refined or the error)."""
     if frc.parameter != "frequency":
         raise ValueError("frc: refine_bifurcations needs a frequency diagram")
     out = []
@@ -220,6 +223,7 @@ def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders
             # a multiplier jumps across the unit circle at a grazing point: no regular root of
             # the extended system; the grazing bracket stays the tolerance
             out.append((bf, ConvergenceError(f"not refined: {bf.note}")))
+            bf.refine_status = f"failed: at a grazing point ({bf.note})"
             continue
         r = None
         for segs in (segments, 4 * segments):  # multiple shooting as the fallback
@@ -231,8 +235,10 @@ def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders
                 r = exc
         if isinstance(r, ConvergenceError):
             out.append((bf, r))
+            bf.refine_status = f"failed: {r}"
             continue
         bf.refined = r
+        bf.refine_status = "refined"
         bf.frequency = bf.value = r.value
         bf.error = r.tolerance
         out.append((bf, r))

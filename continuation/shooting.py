@@ -22,6 +22,7 @@ import numpy as np
 import nlbeam
 from nlbeam.integrate import FlowMap
 from nlbeam._validate import choice
+from nlbeam.summary import Summary, field_rows
 from nlbeam.solver import Solver, period_step, phase_step
 from nlbeam.vocabulary import METHODS as METHOD_NAMES
 
@@ -528,8 +529,8 @@ class Evaluation:
     lazy_p: object = None  # (start, its evaluation) of a corrector at fixed p (dR/dp left out)
 
 
-@dataclass
-class PeriodicSolution:
+@dataclass(repr=False)
+class PeriodicSolution(Summary):
     """A periodic solution of order n (period n / f).
 
     state0 (2N,): state at t = 0 (excitation phase zero); disc0: its contact state (None if out
@@ -565,6 +566,11 @@ class PeriodicSolution:
     xmax_error: float | None = None
     multipliers_error: np.ndarray | None = None
     integrator: Integrator | None = None
+
+    def _summary_rows(self):
+        return field_rows(self, skip=("integrator",)) + [
+            ("integrator", "None" if self.integrator is None
+             else type(self.integrator).__name__)]
 
 
 def decay_rate(model):

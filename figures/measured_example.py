@@ -32,7 +32,7 @@ def _rig_record(model, duration, transient, path):
     noise = stochastic.BandLimitedNoise(BAND, rms=RMS, seed=101, lowpass=LOWPASS)
     res = stochastic.simulate(model, noise, duration, transient, channels=("delta", "y"),
                               outputs=("moments",), dt=1.0 / FS_RIG,
-                              keep_history=(transient, transient + duration))
+                              keep_history=(0.0, duration))
     h = res.history
     rng = np.random.default_rng(7)
     cols = {"t": h["t"]}

@@ -31,14 +31,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._validate import choice, positive
+from .summary import Summary
 
 LAWS = ("hertz", "lankarani-nikravesh", "hunt-crossley")
 METHODS = ("least-squares", "paper")
 MIN_SAMPLES = 5  # samples in contact a collision needs to be used
 
 
-@dataclass(frozen=True)
-class Collision:
+@dataclass(frozen=True, repr=False)
+class Collision(Summary):
     """One contact: delta (m), delta' (m/s), F (N) at its samples in contact, and the
     penetration rate at the onset delta'_minus (m/s, > 0)."""
 
@@ -48,8 +49,8 @@ class Collision:
     rate_onset: float
 
 
-@dataclass(frozen=True)
-class ContactFit:
+@dataclass(frozen=True, repr=False)
+class ContactFit(Summary):
     """Estimated contact parameters with standard errors.
 
     K_hertz (N/m^1.5); e (restitution, Lankarani-Nikravesh; for Hunt-Crossley the

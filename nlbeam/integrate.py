@@ -12,6 +12,7 @@ from . import _kernels as _k
 from ._validate import finite, positive
 from .excitation import Excitation
 from .solver import METHODS, MIN_STEPS_PER_CONTACT, Solver, warn_few_contact_steps
+from .summary import Summary
 
 __all__ = ["integrate", "flow", "FlowMap", "Trajectory", "Flow", "IntegrationError",
            "default_dt", "METHODS", "MIN_STEPS_PER_CONTACT"]
@@ -45,8 +46,8 @@ def default_dt(model, excitation, method="rk4"):
     return Solver(method).default_dt(model, excitation)
 
 
-@dataclass
-class Trajectory:
+@dataclass(repr=False)
+class Trajectory(Summary):
     """A time history on a uniform grid.
 
     t (n,) s; x, v (n, N) m and m/s; delta (n, n_elements) m, penetration (> 0 in contact);
@@ -89,8 +90,8 @@ class Trajectory:
         return self.excitation.evaluate(self.t)[1]
 
 
-@dataclass
-class Flow:
+@dataclass(repr=False)
+class Flow(Summary):
     """End of one interval: state (2N,), disc (n_elements, 2), xmax (N,) max |x_i| over the
     interval (refined between steps on the quintic dense output), n_impacts, and with
     ``monodromy=True`` the matrix d state(t0+T) / d state(t0) (2N, 2N) from the variational

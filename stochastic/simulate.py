@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nlbeam._validate import nonnegative, positive
+from nlbeam.summary import Summary, describe_value
 from nlbeam.vocabulary import CHANNELS
 
 from .assemble import feed, make_estimators, store_results
@@ -92,8 +93,8 @@ def _attr(v):
     return str(v)
 
 
-@dataclass
-class StochasticResult:
+@dataclass(repr=False)
+class StochasticResult(Summary):
     """Statistics of one simulated record (the kept ``duration`` after the ``transient``).
 
     Per channel (``channels``): Welch PSD ``psd(ch) -> (f Hz, P units^2/Hz)`` with its
@@ -140,6 +141,36 @@ class StochasticResult:
     wall_time: float = 0.0
     success: bool = True
     message: str = "completed"
+
+    def _summary_rows(self):
+        rows = [("channels", ", ".join(self.channels)), ("outputs", ", ".join(self.outputs)),
+                ("record", f"{self.duration:.6g} s kept after a {self.transient:.6g} s "
+                           f"transient, fs {self.fs:.6g} Hz"),
+                ("method", str(self.method)), ("seed", describe_value(self.seed)),
+                ("impacts", f"{self.n_impacts} ({self.n_impacts / self.duration:.4g} /s)"
+                 if self.duration > 0 else str(self.n_impacts))]
+        for ch in self.channels:
+            parts = []
+            if ch in self.moment_data:
+                mo = self.moment_data[ch]
+                se = float(mo.get("se_std", float("nan")))
+                parts.append(f"std {mo['std']:.4g}" + (f" +- {se:.2g}" if se == se else ""))
+                parts.append(f"kurtosis {mo['kurtosis']:.3g}")
+            if ch in self.psd_data:
+                d = self.psd_data[ch]
+                f = np.asarray(d.get("frequencies", ()))
+                if f.size > 1:
+                    parts.append(f"PSD {f.size} bins of {f[1] - f[0]:.3g} Hz")
+                if "n_segments" in d:
+                    parts.append(f"{int(d['n_segments'])} averages")
+            if ch in self.pdf_data:
+                parts.append(f"PDF {len(self.pdf_data[ch].get('centres', ()))} bins")
+            rows.append((f"  {ch}", ", ".join(parts) or "-"))
+        if self.history is not None and "t" in self.history:
+            rows.append(("history", describe_value(np.asarray(self.history["t"]))))
+        rows += [("success", f"{self.success} ({describe_value(self.message)})"),
+                 ("wall_time [s]", f"{self.wall_time:.3g}")]
+        return rows
 
     def _get(self, store, ch, what):
         if ch not in self.channels:
@@ -207,6 +238,23 @@ def load(path) -> StochasticResult:
     return load_stochastic_result(path)
 
 
+def _history_window(window, t_kept, duration):
+    """keep_history (s after the transient) -> the absolute window [h0, h1] s; raises when it
+    is not a window inside the kept record [0, duration]."""
+    try:
+        w0, w1 = (float(v) for v in window)
+    except (TypeError, ValueError):
+        raise ValueError(f"keep_history: must be (t0, t1) in s after the transient or None, "
+                         f"got {window!r}") from None
+    if not w1 > w0:
+        raise ValueError(f"keep_history: must satisfy t0 < t1, got {window!r}")
+    slack = 1e-9 * max(duration, 1.0)
+    if w0 < -slack or w1 > duration + slack:
+        raise ValueError(f"keep_history: {window!r} s lies outside the kept record [0, "
+                         f"{duration:.6g}] s (times count from the end of the transient)")
+    return t_kept + w0, t_kept + w1
+
+
 def _default_resolution(duration):
     # >= ~31 Welch averages (50 % overlap), never finer than 0.05 Hz
     return max(0.05, 16.0 / duration)
@@ -234,7 +282,10 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     a DOP853 rtol 1e-13 reference; benchmarks/stochastic_work_precision.py) at ~0.4 the CPU of
     rk4 with dt = 5e-5 s and 32 steps per contact, whose error there is 5.6e-4.
     psd_resolution: Welch bin spacing (Hz), default max(0.05, 16/duration).
-    keep_history: (t0, t1) s, keep the samples in that window (memory ~ its length).
+    keep_history: (t0, t1) s after the transient (0 <= t0 < t1 <= duration: a window
+    outside the kept record raises), keep the samples in that window (memory ~ its length);
+    ``history["t"]`` holds their times from the excitation's start (t_start + transient + t0
+    onwards).
     chunk_duration: s per call to the integrator (default: the noise's block or 1 s).
     pdf_bins / pdf_edges: histogram (edges chosen from the first kept chunk if not given).
     batch_duration: s per fine batch of the standard errors (default 64 samples); the
@@ -312,13 +363,8 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     batch = 64 if batch_duration is None else max(
         int(round(positive("batch_duration", batch_duration, unit="s") * fs)), 1)
     if keep_history is not None:
-        try:
-            h0, h1 = (float(v) for v in keep_history)
-        except (TypeError, ValueError):
-            raise ValueError(f"keep_history: must be (t0, t1) in s or None, "
-                             f"got {keep_history!r}") from None
-        if not h1 > h0:
-            raise ValueError(f"keep_history: must satisfy t0 < t1, got {keep_history!r}")
+        h0, h1 = _history_window(keep_history, t0 + n_tr * dt, n_keep * dt)
+        h_tol = 1e-6 * dt * store_every  # the ends are samples: round-off of the grid times
     if progress is True:
         def progress(done, total):  # noqa: F811 - the printing default
             print(f"stochastic.simulate: {done:.4g} / {total:.4g} s", file=sys.stderr)
@@ -410,11 +456,11 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
                 data = np.ascontiguousarray(_extract(tr, kind, i, sel))
                 feed(est[ch], data)
                 if keep_history is not None:
-                    hsel = (tr.t[sel] >= h0) & (tr.t[sel] <= h1)
+                    hsel = (tr.t[sel] >= h0 - h_tol) & (tr.t[sel] <= h1 + h_tol)
                     if np.any(hsel):
                         hist_parts[ch].append(data[hsel])
             if keep_history is not None:
-                hsel = (tr.t[sel] >= h0) & (tr.t[sel] <= h1)
+                hsel = (tr.t[sel] >= h0 - h_tol) & (tr.t[sel] <= h1 + h_tol)
                 if np.any(hsel):
                     hist_parts["t"].append(tr.t[sel][hsel])
         k0 = k1
@@ -589,8 +635,8 @@ def _min_damping_ratio(model):
 
 
 # -- ensembles ----------------------------------------------------------------------------
-@dataclass
-class EnsembleResult:
+@dataclass(repr=False)
+class EnsembleResult(Summary):
     """Members of an ensemble and their combination.
 
     ``psd(ch) -> (f, mean P, lower, upper)``: mean over members with a Student-t 95 %
@@ -601,6 +647,16 @@ class EnsembleResult:
 
     seeds: list
     members: list
+
+    def _summary_rows(self):
+        first = self.members[0] if self.members else None
+        rows = [("members", str(len(self.members))), ("seeds", describe_value(self.seeds))]
+        if first is not None:
+            rows += [("channels", ", ".join(first.channels)),
+                     ("record", f"{first.duration:.6g} s each, fs {first.fs:.6g} Hz"),
+                     ("success", f"{sum(bool(m.success) for m in self.members)} of "
+                                 f"{len(self.members)}")]
+        return rows
 
     def _check(self):
         if len(self.members) < 2:

@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import time
 import warnings
 
 _UNITS = ("Units: displacements and amplitudes in m (1e-4 = 0.1 mm), frequencies in Hz, "
@@ -17,10 +16,10 @@ _UNITS = ("Units: displacements and amplitudes in m (1e-4 = 0.1 mm), frequencies
 
 
 def _log(args):
-    def log(msg):
-        if not args.quiet:
-            print(msg, file=sys.stderr, flush=True)
-    return log
+    """Progress lines on stderr (a bar for what advances, on a terminal); none with --quiet."""
+    from .progress import Progress
+
+    return Progress(quiet=args.quiet)
 
 
 def _model(args):
@@ -41,6 +40,7 @@ def _check_workers(args):
 
 
 def _demo(args):
+    from .defaults import DEMO_WORKERS
     from .demo import DEMO_SCENE
     from .files import write_text_atomic
     from .scenes import format_plan, load_scene, plan, run_scene
@@ -62,8 +62,8 @@ def _demo(args):
     write_text_atomic(path, DEMO_SCENE)
     # small analyses: in this process unless asked (a pool's workers would each load the
     # compiled kernels, which costs more than the analyses here)
-    rep = run_scene(path, out, workers=1 if args.workers is None else args.workers,
-                    quiet=args.quiet)
+    rep = run_scene(path, out, workers=DEMO_WORKERS if args.workers is None else args.workers,
+                    scheduler=args.scheduler, quiet=args.quiet)
     _log(args)(f"nlbeam demo: {rep.computed} computed, {rep.reused} reused, "
                f"{len(rep.files)} files in {rep.wall_time:.1f} s -> {out} (scene: {path})")
     return 0
@@ -92,9 +92,17 @@ def _frc(args):
     log(f"nlbeam frc: {len(frc.branches)} branches, {frc.n_points} points, "
         f"{len(frc.bifurcations)} bifurcations in {frc.wall_time:.1f} s -> {args.out}")
     if not args.quiet:
-        for b in frc.bifurcations:
-            print(f"{b.kind:16s} order {b.order}  f = {b.frequency:.9g} +- {b.error:.1e} Hz  "
-                  f"|x|max = {b.xmax * 1e3:.4f} mm" + (f"  ({b.note})" if b.note else ""))
+        from .scenes.bifurcation_list import list_bifurcations
+        from .scenes.numbers import error_bound, with_error
+
+        rows = list_bifurcations(frc)
+        if rows:
+            print(f"{'f [Hz]':>14s}  {'error [Hz]':>10s}  {'kind':24s} order branch  "
+                  f"|x|max [mm]  (sorted; reports of one point merged)")
+        for r in rows:
+            print(f"{with_error(r.frequency, r.frequency_error):>14s}  "
+                  f"{error_bound(r.frequency_error):>10s}  {r.kind:24s} {r.order:5d} "
+                  f"{r.branch:6d}  {r.xmax * 1e3:11.4f}" + (f"  ({r.note})" if r.note else ""))
     if args.plot:
         from .plots.files import files_backend, save_figure
         from .plots.frequency_response import plot_frequency_response
@@ -111,12 +119,8 @@ def _simulate(args):
     model = _model(args)
     noise = stochastic.BandLimitedNoise(band=tuple(args.band), rms=args.rms, seed=args.seed,
                                         lowpass=args.lowpass)
-    last = [0.0]
-
     def progress(done, total):
-        if done >= total or time.perf_counter() - last[0] > 5.0:
-            last[0] = time.perf_counter()
-            log(f"nlbeam simulate: {done:.4g} / {total:.4g} s simulated")
+        log.bar("nlbeam simulate: simulated", done, total, "s")
 
     res = stochastic.simulate(model, noise, args.duration, args.transient,
                               channels=tuple(args.channels), method=args.method,
@@ -278,8 +282,9 @@ def _parser():
     # from their signatures, and the paper's study); importing them loads the analyses
     from nlbeam.vocabulary import CHANNELS, METHODS
 
-    from .defaults import (CHANNEL, MIN_PROMINENCE, MODEL, PERIODIC, SIMULATE_CHANNELS,
-                           STOCHASTIC)
+    from .defaults import (CHANNEL, DEMO_DURATION, DEMO_WORKERS, MIN_PROMINENCE, MODEL,
+                           PERIODIC, SIMULATE_CHANNELS, STOCHASTIC)
+    from .demo import demo_summary
 
     per, sto = PERIODIC, STOCHASTIC
     common = argparse.ArgumentParser(add_help=False)
@@ -298,18 +303,20 @@ def _parser():
 
     p = sub.add_parser("demo", parents=[common], help="a short version of `nlbeam figures`: "
                        "every kind of figure and table on a small diagram and 10 s records "
-                       "(about half a minute once the kernels are compiled)",
-                       description="Write a small scene (OUT/demo.toml) and run it: the "
-                       "frequency-response diagram 30-100 Hz (orders 1, 2), broad-band (0-200 Hz) "
-                       "and narrow-band (78-98 Hz) base noise of rms 0.1 mm, PSDs, PDF, time "
-                       "history, the comparison and the tables. Cached like any scene: a second "
-                       "run takes seconds. " + _UNITS)
+                       f"({DEMO_DURATION} once the kernels are compiled)",
+                       description="Write a small scene (OUT/demo.toml) and run it: "
+                       f"{demo_summary()}; PSDs, PDF, time history, the comparison and the "
+                       "tables. Cached like any scene: a second run takes seconds. " + _UNITS)
     p.add_argument("--out", default="nlbeam-demo",
                    help="output folder (scene, figures, tables, cache), default ./nlbeam-demo")
     p.add_argument("--dry-run", action="store_true",
                    help="print what would be computed or reused and written, do nothing")
     p.add_argument("--workers", type=int, default=None,
-                   help="processes for the analyses (default 1: this process)")
+                   help=f"processes for the analyses (default {DEMO_WORKERS}: this process; "
+                   "the demo's analyses are small and each worker loads the compiled kernels)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run the analyses on this Dask scheduler, e.g. tcp://host:8786 "
+                   "(pip install 'nlbeam[distributed]')")
     p.set_defaults(func=_demo)
 
     def model_opts(p):
@@ -441,7 +448,8 @@ def _parser():
         p.add_argument("--dry-run", action="store_true",
                        help="print what would be computed or reused and written, do nothing")
         p.add_argument("--workers", type=int, default=None,
-                       help="processes for sweep points (default: CPU count)")
+                       help="processes for sweep points (default: the CPU count, at most the "
+                       "number of analyses)")
         p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                        help="run sweep points on this Dask scheduler, e.g. tcp://host:8786 "
                        "(pip install 'nlbeam[distributed]')")
@@ -473,7 +481,10 @@ def main(argv=None):
         args.quiet = False
     def show(message, category, filename, lineno, file=None, line=None):
         # a warning (accuracy, a branch that ended early, a record that gained energy) is one
-        # line on stderr, --quiet or not: it says what to change
+        # line on stderr, --quiet or not: it says what to change (a bar's line ended first)
+        from .progress import end_bar_line
+
+        end_bar_line()
         print(f"nlbeam {args.command}: warning: {str(message).strip()}", file=sys.stderr,
               flush=True)
 

@@ -78,13 +78,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from nlbeam.summary import Summary
+
 __all__ = ["PeakMatch", "Resonance", "map_peaks", "find_peaks", "resonances", "KINDS"]
 
 KINDS = ("harmonic", "subharmonic", "superharmonic", "asymmetry", "unexplained")
 
 
-@dataclass(frozen=True)
-class Resonance:
+@dataclass(frozen=True, repr=False)
+class Resonance(Summary):
     """A point where a branch resonates. frequency: excitation frequency (Hz); response:
     the response frequency where it shows in a PSD (Hz); kind 'harmonic', 'subharmonic'
     or 'superharmonic'; order n (subharmonic) or k (superharmonic), 1 for harmonic;
@@ -99,8 +101,8 @@ class Resonance:
     branch: int
 
 
-@dataclass(frozen=True)
-class PeakMatch:
+@dataclass(frozen=True, repr=False)
+class PeakMatch(Summary):
     """One PSD peak and its explanation (see the module doc for the rule).
 
     frequency: peak (Hz); prominence: decades above the local background; psd: P at the

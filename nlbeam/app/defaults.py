@@ -21,7 +21,8 @@ import stochastic
 from .compare import map_peaks
 
 __all__ = ["signature_defaults", "PERIODIC", "STOCHASTIC", "MODEL", "CHANNEL",
-           "MIN_PROMINENCE", "HISTORY_SECONDS", "HISTORY_CHANNELS", "SIMULATE_CHANNELS"]
+           "MIN_PROMINENCE", "HISTORY_SECONDS", "HISTORY_CHANNELS", "SIMULATE_CHANNELS",
+           "DEMO_WORKERS", "DEMO_DURATION"]
 
 
 def signature_defaults(func) -> dict:
@@ -60,3 +61,9 @@ HISTORY_SECONDS = 0.5
 HISTORY_CHANNELS = ["y", "x"]
 #: the channels ``nlbeam simulate`` records and summarizes
 SIMULATE_CHANNELS = ["delta", "x", "y"]
+#: processes of ``nlbeam demo`` (its analyses are small: a pool's workers would each load the
+#: compiled kernels, which costs more than the analyses); ``nlbeam run`` defaults to the CPU
+#: count (nlbeam.app.sweeps.run_jobs)
+DEMO_WORKERS = 1
+#: how long ``nlbeam demo`` takes once the kernels are compiled (measured; README and --help)
+DEMO_DURATION = "about 20 s"

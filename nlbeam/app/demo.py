@@ -1,6 +1,8 @@
 """The scene ``nlbeam demo`` writes and runs (text of a scene file, see nlbeam.app.scenes)."""
 
-__all__ = ["DEMO_SCENE"]
+import tomllib
+
+__all__ = ["DEMO_SCENE", "demo_summary"]
 
 #: the scene `nlbeam demo` runs: every kind of figure and table of `nlbeam figures`, on a
 #: smaller diagram (30-100 Hz, orders 1 and 2) and 10 s records, broad band and the narrow
@@ -77,3 +79,13 @@ file = "demo_peaks.csv"
 kind = "bifurcations"
 file = "demo_bifurcations.csv"
 """
+
+
+def demo_summary():
+    """What the demo computes, read from DEMO_SCENE (the help text's one source)."""
+    d = tomllib.loads(DEMO_SCENE)
+    p, s = d["periodic"], d["stochastic"]
+    bands = [f"{lo:g}-{hi:g} Hz" for lo, hi in d["sweep"]["values"]]
+    return (f"the frequency-response diagram {p['f_range'][0]:g}-{p['f_range'][1]:g} Hz "
+            f"(orders {', '.join(map(str, p['orders']))}), {s['duration']:g} s records under "
+            f"base noise of rms {s['rms'] * 1e3:g} mm in the bands {' and '.join(bands)}")

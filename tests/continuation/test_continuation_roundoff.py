@@ -268,3 +268,28 @@ def test_refine_skips_bifurcations_at_grazing_points():
     ((b, res),) = refine_bifurcations(frc, nlbeam.BeamImpact.paper())
     assert b is bf and isinstance(res, C.ConvergenceError) and "at grazing" in str(res)
     assert bf.refined is None and bf.frequency == 13.3171 and bf.tolerance == 4.8e-5
+    assert bf.refine_status.startswith("failed: at a grazing point")
+
+
+def test_refinement_status_and_record_are_saved(tmp_path):
+    """A refined record (value, error, levels' values), a failure with its reason and a
+    bifurcation never refined come back from the file as they were (issue 16)."""
+    from continuation.diagram import Bifurcation, FrequencyResponse
+    from continuation.refine import Refined
+    mu = np.array([1.0 + 0j, 0.2 + 0j])
+    a, b, c = (Bifurcation(k, f, f, 1e-4, 1, 0, 1e-9, mu, state0=np.array([1e-4, 0.0]))
+               for k, f in (("fold", 12.5), ("period-doubling", 13.0), ("fold", 14.0)))
+    a.refined = Refined("fold", 1, np.array([12.51, 12.502, 12.5005]), np.array([12.50001]),
+                        12.50001, 3e-9, 9.6, np.array([4.0]), np.array([1.0, 2.0, 4.0]), (),
+                        a.state0)
+    a.refine_status, a.error = "refined", 3e-9
+    b.refine_status = "failed: extended system: no convergence after 20 iterations"
+    frc = FrequencyResponse({}, 1e-4, "frequency", (12.0, 15.0), bifurcations=[a, b, c])
+    frc.save(tmp_path / "d.h5")
+    la, lb, lc = C.load(tmp_path / "d.h5").bifurcations
+    assert la.refine_status == "refined" and la.error == 3e-9
+    assert (la.refined.value, la.refined.tolerance, la.refined.digits) == (12.50001, 3e-9, 9.6)
+    assert np.array_equal(la.refined.values, a.refined.values)
+    assert np.array_equal(la.refined.seconds, a.refined.seconds)
+    assert lb.refined is None and lb.refine_status == b.refine_status
+    assert lc.refined is None and lc.refine_status == ""

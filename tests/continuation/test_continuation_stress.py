@@ -138,6 +138,13 @@ def test_refinement_restarts_inside_a_contact_with_its_memory(tmp_path):
                                      levels=LEVELS[:3], max_levels=3)
     assert isinstance(r, C.Refined), r
     assert abs(r.value - f_diagram) < 1e-2 and r.tolerance < 1e-4  # 3 levels only
+    # the refinement is saved with the diagram and loaded back (issue 16)
+    frc.save(tmp_path / "r.h5")
+    back = C.load(tmp_path / "r.h5").bifurcations[i]
+    assert back.refine_status == "refined" and back.refined is not None
+    assert back.refined.value == r.value and back.refined.tolerance == r.tolerance
+    assert np.array_equal(back.refined.values, r.values) and back.error == r.tolerance
+    assert back.frequency == r.value
 
 
 def test_no_progress_rule_stops_the_branch_loudly():

@@ -114,9 +114,18 @@ def test_frc_simulate_compare(tmp_path, capsys):
     assert main(["frc", "--amplitude", "1e-4", "--f-range", "42", "45", "--orders", "1",
                  "--n-grid", "3", "--out", frc]) == 0
     # progress on stderr: the brute-force grid, then one line per branch with its points
-    err = capsys.readouterr().err.splitlines()
+    cap = capsys.readouterr()
+    err = cap.err.splitlines()
     import continuation
     diagram = continuation.load(frc)
+    # stdout: the bifurcations sorted by frequency, with error, branch and order, merged
+    from nlbeam.app.scenes.bifurcation_list import list_bifurcations
+    rows = [ln.split() for ln in cap.out.splitlines()[1:]]
+    listed = list_bifurcations(diagram)
+    assert len(rows) == len(listed)
+    assert [float(r[0]) for r in rows] == sorted(float(r[0]) for r in rows)
+    assert [(r[2], int(r[3]), int(r[4])) for r in rows] == [(b.kind, b.order, b.branch)
+                                                            for b in listed]
     branch_lines = [ln for ln in err if ln.startswith("nlbeam frc:   branch ")]
     assert any(ln.startswith("nlbeam frc:   brute-force grid: ") for ln in err), err
     assert len(branch_lines) == len(diagram.branches) >= 1

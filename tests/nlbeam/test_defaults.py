@@ -73,6 +73,33 @@ def test_help_prints_the_shared_defaults(capsys):
     assert "default " + " ".join(map(str, defaults.PERIODIC["orders"])) in text
 
 
+def test_the_demo_help_readme_and_scene_agree(capsys):
+    """demo --help reads its workers default, its time and what it computes from one place
+    each (defaults.py, the demo scene), and the README and docs/usage.md say the same time."""
+    import os
+    import tomllib
+
+    from nlbeam.app.demo import DEMO_SCENE
+    with pytest.raises(SystemExit):
+        _parser().parse_args(["demo", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert f"default {defaults.DEMO_WORKERS}: this process" in text and "--scheduler" in text
+    sc = tomllib.loads(DEMO_SCENE)
+    lo, hi = sc["periodic"]["f_range"]
+    assert f"diagram {lo:g}-{hi:g} Hz" in text
+    assert all(f"{a:g}-{b:g} Hz" in text for a, b in sc["sweep"]["values"])
+    with pytest.raises(SystemExit):
+        _parser().parse_args(["--help"])
+    top = " ".join(capsys.readouterr().out.split())
+    assert f"({defaults.DEMO_DURATION} once the kernels are compiled)" in top
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    for doc in ("README.md", os.path.join("docs", "usage.md")):
+        with open(os.path.join(root, doc), encoding="utf-8") as fh:
+            words = " ".join(fh.read().split())
+        assert f"{defaults.DEMO_DURATION} once the kernels are compiled" in words.replace(
+            "About", "about"), doc
+
+
 def test_the_vocabulary_is_the_one_the_core_accepts(tmp_path):
     integrate_module = importlib.import_module("nlbeam.integrate")  # the module, not the function
     assert tuple(integrate_module.METHODS) == vocabulary.METHODS

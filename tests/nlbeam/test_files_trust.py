@@ -168,6 +168,10 @@ def test_empty_truncated_and_non_hdf5_files_each_have_their_message(tmp_path):
             _refused(continuation.load, tmp_path / "half.h5", "truncated"),
             _refused(stochastic.load, tmp_path / "text.h5", "not-hdf5")}
     assert len(msgs) == 3
+    # a measured record given to a result loader: the message names the reader of records
+    (tmp_path / "record.csv").write_text("t,x\n0.0,1.0\n")
+    assert "stochastic.analyze" in _refused(continuation.load, tmp_path / "record.csv",
+                                            "not-hdf5")
     with pytest.raises(FileNotFoundError, match="no such file"):
         continuation.load(tmp_path / "missing.h5")
 

@@ -131,3 +131,147 @@ def test_diagram_titles_name_the_excitation_and_the_legend_the_line_styles():
     assert "force amplitude 2 N" in ax.get_title()
     assert ax.get_xlabel() == "excitation frequency [Hz]"
     plt.close(ax.figure)
+
+
+def _small_diagram(kind):
+    """A diagram of two branches (no computation): enough for the figure kinds."""
+    import numpy as np
+
+    from continuation.diagram import Bifurcation, Branch, FrequencyResponse
+    model = nlbeam.BeamImpact.paper() if kind == "base" else _force_system()
+    f = np.linspace(30.0, 60.0, 40)
+    xm = 1e-4 * (1.0 + 1.0 / (1.0 + ((f - 44.0) / 2.0) ** 2))
+    br = Branch(order=1, parameter="frequency", values=f, frequency=f, amplitude=np.ones(40),
+                xmax=xm, stable=f < 50.0, multipliers=None, state0=np.zeros((40, 2)),
+                states=np.zeros((40, 1, 2)), boundaries=np.zeros((40, 1)))
+    bif = Bifurcation("period-doubling", 50.0, 50.0, float(np.interp(50.0, f, xm)), 1, 0, 1e-6,
+                      None)
+    return FrequencyResponse(dict(model.parameters()), 1e-4 if kind == "base" else 2.0,
+                             "frequency", (30.0, 60.0), branches=[br], bifurcations=[bif])
+
+
+def _every_kind(kind, res):
+    """(name, function of (ax, path) drawing that figure kind) for every figure of the toolkit."""
+    import numpy as np
+
+    from nlbeam.app.plots.compare import plot_comparison
+    from nlbeam.app.plots.identify import plot_contact_fit
+    from nlbeam.identify import identify_contact
+
+    frc = _small_diagram(kind)
+    t = np.linspace(0.0, 1e-3, 200)
+    d = 1e-5 * np.sin(np.pi * t / 1e-3)
+    r = 1e-5 * np.pi / 1e-3 * np.cos(np.pi * t / 1e-3)
+    F = 2e8 * d ** 1.5
+    fit = identify_contact([d, d], [r, r], [F, F], law="hertz")
+    return [
+        ("frc", lambda ax, p: plot_frequency_response(frc, ax, path=p)),
+        ("compare", lambda ax, p: plot_comparison(res.psd("delta"), frc, ax=ax, path=p,
+                                                  f_max=120.0)),
+        ("excitation_psd", lambda ax, p: splot.excitation_psd(res, ax=ax, path=p)),
+        ("response_psd", lambda ax, p: splot.response_psd(res, "delta", ax=ax, path=p)),
+        ("pdf", lambda ax, p: splot.pdf(res, "x", ax=ax, path=p)),
+        ("history", lambda ax, p: splot.time_history(res, ("x",), ax=ax, path=p)),
+        ("channel_psds", lambda ax, p: splot.channel_psds(res, ax=ax, path=p)),
+        ("contact_fit", lambda ax, p: plot_contact_fit(fit, [d, d], [r, r], [F, F], ax=ax,
+                                                       path=p)),
+    ]
+
+
+def test_every_figure_kind_draws_into_ax_and_closes_what_it_saves(result, tmp_path):
+    """Each figure function returns the Figure, draws into the axes it is given (opening no
+    figure) and, when it saves a figure it opened, closes it (issue 16)."""
+    kind, res = result
+    plt.close("all")
+    for name, draw in _every_kind(kind, res):
+        fig0, ax0 = plt.subplots()
+        axes = (ax0, fig0.add_subplot(212)) if name == "compare" else ax0
+        got = draw(axes, None)
+        assert got is fig0, name
+        assert plt.get_fignums() == [fig0.number], name  # nothing else opened
+        assert ax0.has_data() and ax0.get_ylabel(), name  # drew into the given axes
+        got = draw(axes, tmp_path / f"{name}_given.png")
+        assert plt.fignum_exists(fig0.number), name  # the caller's figure stays open
+        plt.close(fig0)
+        fig = draw(None, None)
+        _promised(name, kind, fig)
+        plt.close(fig)
+        path = tmp_path / f"{name}.png"
+        fig = draw(None, path)
+        assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
+        assert not plt.fignum_exists(fig.number) and plt.get_fignums() == [], name
+
+
+def _promised(name, kind, fig):
+    """The labels, units and limits each figure kind promises, read back from matplotlib."""
+    ax = fig.axes[0]
+    y_unit = "m" if kind == "base" else "N"
+    if name == "frc":
+        assert ax.get_xlabel() == "excitation frequency [Hz]"
+        assert ax.get_ylabel().endswith("[mm]") and ax.get_xlim() == (30.0, 60.0)
+        assert ("base amplitude 0.1 mm" if kind == "base" else "force amplitude 2 N") \
+            in ax.get_title()
+        texts = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert "stable (solid)" in texts and "unstable (dashed)" in texts
+    elif name == "compare":
+        assert ax.get_ylabel() == "PSD of delta [m$^2$/Hz]" and ax.get_xlim() == (0.0, 120.0)
+        assert fig.axes[1].get_xlabel() == "response frequency [Hz]"
+        assert fig.axes[1].get_ylabel() == "|x|max [mm]"
+    elif name == "excitation_psd":
+        assert ax.get_ylabel() == f"PSD of y [{y_unit}$^2$/Hz]"
+        assert ax.get_xlabel() == "frequency [Hz]" and ax.get_xlim() == (0.0, 2 * BAND[1])
+    elif name == "response_psd":
+        assert ax.get_ylabel() == "PSD of delta [m$^2$/Hz]"
+        assert ax.get_xlim() == (0.0, 2 * BAND[1])
+        lo, hi = ax.get_ylim()
+        assert 0 < lo and hi / lo <= 3e8  # at most 8 decades and a half: no leakage floor
+    elif name == "pdf":
+        assert (ax.get_xlabel(), ax.get_ylabel()) == ("x [mm]", "probability density [1/mm]")
+    elif name == "history":
+        assert ax.get_xlabel() == "t after the transient [s]" and ax.get_ylabel() == "x [mm]"
+        assert ax.get_xlim() == pytest.approx((1.0, 1.5))  # keep_history=(1.0, 1.5)
+    elif name == "channel_psds":
+        assert fig.axes[-1].get_xlabel() == "frequency [Hz]"
+        assert [a.get_ylabel() for a in fig.axes] == [
+            f"PSD of {c} [{u}$^2$/Hz]" for c, u in (("delta", "m"), ("x", "m"), ("y", y_unit),
+                                                    ("force", "N"))]
+    else:
+        assert (ax.get_xlabel(), ax.get_ylabel()) == ("indentation delta [um]",
+                                                      "contact force F [N]")
+        assert ax.get_xlim()[0] == 0.0
+
+
+def test_sweep_labels_in_the_units_of_the_axes():
+    """A sweep's legend says 'rms = 0.025 mm' on mm axes, not 'rms=2.5e-05' (issue 16)."""
+    import importlib
+
+    importlib.import_module("nlbeam.app.scenes")  # (the scene figures import the schema)
+    from nlbeam.app.plots.scene import variant_label
+
+    assert variant_label("rms=2.5e-05") == "rms = 0.025 mm"
+    assert variant_label("amplitude=0.0001") == "amplitude = 0.1 mm"
+    assert variant_label("rms=0.5", "force") == "rms = 0.5 N"
+    assert variant_label("band=78-98") == "band = 78-98 Hz"
+    assert variant_label("seed=3") == "seed=3" and variant_label("") == ""
+
+
+def test_comparison_legend_lists_only_drawn_peaks_and_labels_stay_inside(result):
+    """A peak beyond f_max gets no legend entry; a label at the low-frequency edge does not
+    cross the y axis (issue 16)."""
+    from nlbeam.app.compare import PeakMatch
+    from nlbeam.app.plots.compare import plot_comparison
+
+    kind, res = result
+    f, P = res.psd("delta")
+    far = PeakMatch(1016.0, 1.0, "unexplained", 0, float("nan"), None, float("nan"),
+                    psd=float(P.max()))
+    low = PeakMatch(1.0, 1.0, "asymmetry", 0, float("nan"), None, float("nan"),
+                    psd=float(P.max()))
+    fig = plot_comparison((f, P), _small_diagram(kind), [far, low], f_max=120.0)
+    ax = fig.axes[0]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "unexplained" not in labels and "asymmetry" in labels
+    fig.canvas.draw()
+    (text,) = [t for t in ax.texts if t.get_text() == "asym"]
+    assert text.get_window_extent().x0 >= ax.get_window_extent().x0
+    plt.close(fig)

@@ -100,7 +100,7 @@ def test_rerun_computes_nothing_and_a_new_seed_recomputes_only_the_stochastic_pa
     assert {k: os.stat(p).st_mtime_ns for k, p in cache.items()} == stamp
     # the key is exactly the inputs (and the code), written beside the result with its hash
     rec = json.loads(open(cache["periodic"][:-3] + ".json").read())
-    assert set(rec) == {"inputs", "result_sha256"}
+    assert set(rec) == {"inputs", "result_sha256", "warnings"}
     assert set(rec["inputs"]) == {"analysis", "model", "periodic", "code"}
     # a new seed: only the stochastic analysis runs again
     scene.write_text(text.replace("seed = 1", "seed = 2"))
@@ -296,3 +296,61 @@ def test_peaks_without_stability_on_the_real_continuation(tmp_path, calls):
     assert (out / "c.png").stat().st_size > 1000
     rows = list(csv.DictReader(open(out / "peaks.csv")))
     assert all(r["stable"] == "" for r in rows)
+
+
+def test_a_cached_rerun_repeats_the_warnings_of_the_computation(tmp_path, monkeypatch):
+    """The warnings an analysis gave are stored with its cache entry and issued again, once
+    each and saying so, when the entry is reused (issue 16)."""
+    import warnings
+
+    from nlbeam.app.scenes.run import CachedResultWarning
+    sim0 = stochastic.simulate
+
+    def sim(*a, **k):
+        warnings.warn("record gained energy: check dt", RuntimeWarning)
+        warnings.warn("record gained energy: check dt", RuntimeWarning)  # once is enough
+        return sim0(*a, **k)
+
+    monkeypatch.setattr(stochastic, "simulate", sim)
+    scene = _write(tmp_path, STOCH + PSD_FIG)
+    with pytest.warns(RuntimeWarning, match="record gained energy") as first:
+        run_scene(scene, tmp_path / "out", quiet=True)
+    assert [str(w.message) for w in first if "energy" in str(w.message)] == [
+        "record gained energy: check dt"]
+    with pytest.warns(CachedResultWarning) as again:
+        rep = run_scene(scene, tmp_path / "out", quiet=True)
+    assert rep.computed == 0
+    texts = [str(w.message) for w in again if w.category is CachedResultWarning]
+    assert texts == ["(cached stochastic, as first computed) record gained energy: check dt"]
+
+
+def test_progress_lines_when_not_a_terminal(tmp_path):
+    """Without a terminal, a scene's progress is plain lines: each analysis, each branch of a
+    diagram, the simulated seconds of a record (the last always); --quiet prints none."""
+    import io
+
+    from nlbeam.app.progress import Progress
+    scene = _write(tmp_path, PERIODIC + STOCH + PSD_FIG + '[[figure]]\nkind = "frc"\n'
+                   'file = "frc.png"\n')
+    buf = io.StringIO()
+    run_scene(scene, tmp_path / "out", log=Progress(stream=buf))
+    text = buf.getvalue()
+    assert "\r" not in text and "[1/2] periodic" in text and "[2/2] stochastic" in text
+    assert "simulated: 1.6 / 1.6 s" in text  # transient + duration, the last line
+    assert "branch" in text or "brute-force" in text  # continuation's own status lines
+    quiet = io.StringIO()
+    run_scene(_write(tmp_path, STOCH.replace("seed = 1", "seed = 2") + PSD_FIG, "q.toml"),
+              tmp_path / "out", log=Progress(stream=quiet, quiet=True))
+    assert quiet.getvalue() == ""
+    bar = io.StringIO()
+    p = Progress(stream=bar, tty=True)
+    p.bar("sim", 0.5, 2.0, "s")
+    p.bar("sim", 2.0, 2.0, "s")
+    assert bar.getvalue().count("\r") == 2 and bar.getvalue().endswith("(100 %)\x1b[K\n")
+    # a warning printed while a bar is drawn starts on its own line
+    from nlbeam.app.progress import end_bar_line
+    bar = io.StringIO()
+    p = Progress(stream=bar, tty=True)
+    p.bar("sim", 0.5, 2.0, "s")
+    end_bar_line()
+    assert bar.getvalue().endswith("(25 %)\x1b[K\n")

@@ -145,3 +145,35 @@ file = "bif.csv"
     assert names == ["bif.csv", "cmp_1.png", "cmp_2.png", "frc.png", "moments.csv", "psd.png"]
     moments = (tmp_path / "out" / "moments.csv").read_text().splitlines()
     assert [r.split(",")[0] for r in moments[1:]] == ["seed=1", "seed=2"]
+
+
+def test_a_pool_relays_each_analysis_progress(tmp_path):
+    """With workers, each analysis still reports its own progress (relayed from the worker
+    processes), not only 'k/n analyses done' (issue 16)."""
+    import io
+
+    from nlbeam.app.progress import Progress
+    (tmp_path / "s.toml").write_text(SWEEP.replace("values = [1, 2]", "values = [3, 4]"))
+    buf = io.StringIO()
+    run_scene(tmp_path / "s.toml", tmp_path / "out", workers=2, log=Progress(stream=buf))
+    text = buf.getvalue()
+    for k in (1, 2):
+        assert f"[{k}/2] stochastic" in text and f"[{k}/2] stochastic seed=" in text, text
+    assert "simulated:" in text and "analyses done: 2 / 2" in text, text
+
+
+def test_dry_run_lists_the_files_a_run_writes(tmp_path):
+    """A per-variant figure of a sweep is written as name_1.png, name_2.png: the plan lists
+    those names, not name.png (issue 16)."""
+    from nlbeam.scenes import format_plan, plan
+
+    (tmp_path / "s.toml").write_text(SWEEP + '\n[[figure]]\nkind = "history"\nfile = "h.png"\n'
+                                     'window = [0.0, 0.2]\n')
+    scene = load_scene(tmp_path / "s.toml")
+    out = str(tmp_path / "out")
+    listed = {line.split(": ", 1)[1] for line in format_plan(scene, plan(scene, out), out)
+              .splitlines() if line.strip().startswith("write")}
+    rep = run_scene(scene, out, workers=1, quiet=True)
+    assert listed == set(rep.files)
+    assert {os.path.basename(f) for f in listed} == {"psd.png", "moments.csv", "h_1.png",
+                                                     "h_2.png"}

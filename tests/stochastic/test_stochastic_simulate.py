@@ -91,7 +91,7 @@ def test_chunked_loop_equals_statistics_of_its_history(k_hertz):
     # its step-size control at every chunk join)
     res = st.simulate(model, noise, 3.0, transient=0.5, channels=("delta", "x"), dt=1e-4,
                       method="rk4", chunk_duration=0.37, psd_resolution=2.0,
-                      keep_history=(0.0, 10.0))
+                      keep_history=(0.0, 3.0))
     t = res.history["t"]
     assert t[0] == pytest.approx(0.5) and t.size == 30_000
     assert np.allclose(np.diff(t), 1e-4, rtol=0, atol=1e-12)  # no duplicate at chunk joins
@@ -187,6 +187,8 @@ def test_ensemble_combines_members_and_is_reproducible():
     (dict(transient=-1.0), "transient"),
     (dict(psd_resolution=0.01), "psd_resolution"),
     (dict(keep_history=(2.0, 1.0)), "keep_history"),
+    (dict(keep_history=(0.5, 1.5), transient=3.0), "keep_history: .* outside the kept record"),
+    (dict(keep_history=(-0.1, 0.5)), "keep_history: .* outside the kept record"),
     (dict(store_every=0), "store_every"),
 ])
 def test_bad_simulate_inputs(kwargs, name):
@@ -195,6 +197,17 @@ def test_bad_simulate_inputs(kwargs, name):
     args.update(kwargs)
     with pytest.raises(ValueError, match=f"^{name}"):
         st.simulate(nlbeam.BeamImpact(), noise, **args)
+
+
+def test_history_window_counts_from_the_end_of_the_transient():
+    """keep_history is s after the transient, in Python as in a scene (issue 16): with a
+    3 s transient the window (0.2, 0.3) holds the samples at 3.2 .. 3.3 s."""
+    noise = st.BandLimitedNoise((0.0, 100.0), rms=1e-4, seed=5)
+    res = st.simulate(nlbeam.BeamImpact(), noise, 1.0, transient=3.0, dt=1e-4, method="rk4",
+                      outputs=("moments",), channels=("x",), keep_history=(0.2, 0.3))
+    t = res.history["t"]
+    assert t[0] == pytest.approx(3.2, abs=1e-9) and t[-1] == pytest.approx(3.3, abs=1e-9)
+    assert t.size == 1001 and res.history["x"].size == 1001
 
 
 def test_factory_needs_seed_and_duration_fits_recording():
@@ -352,7 +365,7 @@ def test_transient_events_do_not_fail_the_record_and_counters_cover_the_kept_rec
             warnings.simplefilter("always")
             res = st.simulate(FORCED, noise, 3.0, transient=1.0, method="rk4", dt=5e-5,
                               chunk_duration=0.7, outputs=("moments",),
-                              keep_history=(0.0, 10.0))
+                              keep_history=(0.0, 3.0))
         assert res.success, res.message
         assert not any("penetration rate" in str(w.message) for w in caught)
         noted += "in the discarded transient" in res.message

@@ -6,7 +6,9 @@ datasets values, frequency, amplitude, xmax, stable, multipliers, state0, states
 xmax_error, multipliers_error, error_sampled, the last ones only where computed),
 ``bifurcations`` (one dataset per field, NaN rows where a multiplier, state or contact memory
 is absent; ``error``, the integration's error estimate, was ``integrator_error`` in older
-files), ``superharmonics``.
+files; ``refine_status`` ('' / 'refined' / 'failed: <reason>') and ``refined/<field>`` (the
+continuation.refine.Refined records: value, tolerance, digits; values, extrapolated, ratios,
+seconds NaN-padded; absent in older files)), ``superharmonics``.
 """
 from __future__ import annotations
 
@@ -14,6 +16,7 @@ import h5py
 import numpy as np
 
 from continuation.diagram import Bifurcation, Branch, FrequencyResponse, Superharmonic
+from continuation.refine import Refined
 
 from .stamped_hdf5 import read_result, write_result
 
@@ -79,6 +82,7 @@ def save_frequency_response(frc, path):
                 if b.disc0 is not None:
                     dc[i] = np.ravel(b.disc0)
             gf.create_dataset("disc0", data=dc)
+            _save_refined(gf, bif)
             gs = h.create_group("superharmonics")
             for name in ("frequency", "xmax", "harmonic", "branch", "ratio", "tolerance"):
                 gs.create_dataset(name, data=np.array([getattr(s, name) for s in
@@ -126,6 +130,7 @@ def load_frequency_response(path):
                 state0=gf["state0"][i],
                 disc0=gf["disc0"][i].reshape(-1, 2) if "disc0" in gf and gf["disc0"].shape[1]
                 and not np.all(np.isnan(gf["disc0"][i])) else None))
+        _load_refined(gf, frc.bifurcations)
         gs = h["superharmonics"]
         for i in range(len(gs["frequency"])):
             frc.superharmonics.append(Superharmonic(
@@ -133,3 +138,44 @@ def load_frequency_response(path):
                 harmonic=int(gs["harmonic"][i]), branch=int(gs["branch"][i]),
                 **{n: float(gs[n][i]) for n in ("ratio", "tolerance") if n in gs}))
     return frc
+
+
+_REFINED_SCALARS = ("value", "tolerance", "digits")
+_REFINED_ARRAYS = ("values", "extrapolated", "ratios", "seconds")
+
+
+def _save_refined(gf, bif):
+    """refine_status of every bifurcation and its Refined record (NaN where not refined)."""
+    gf.create_dataset("refine_status", data=np.array(
+        [getattr(b, "refine_status", "").encode() for b in bif], dtype=h5py.string_dtype()))
+    rec = [b.refined for b in bif]
+    g = gf.create_group("refined")
+    for name in _REFINED_SCALARS:
+        g.create_dataset(name, data=np.array([getattr(r, name) if r is not None else np.nan
+                                              for r in rec], dtype=float))
+    for name in _REFINED_ARRAYS:
+        n = max([len(getattr(r, name)) for r in rec if r is not None], default=0)
+        a = np.full((len(rec), n), np.nan)
+        for i, r in enumerate(rec):
+            if r is not None:
+                a[i, :len(getattr(r, name))] = getattr(r, name)
+        g.create_dataset(name, data=a)
+
+
+def _load_refined(gf, bif):
+    """Set refine_status and refined (a Refined without its Integrator levels) from ``gf``."""
+    if "refine_status" not in gf:  # written before refinements were saved
+        return
+    st = gf["refine_status"]
+    g = gf["refined"]
+    for i, b in enumerate(bif):
+        b.refine_status = st[i].decode() if isinstance(st[i], bytes) else str(st[i])
+        if b.refine_status != "refined":
+            continue
+        arrays = {}
+        for name in _REFINED_ARRAYS:
+            row = g[name][i]
+            arrays[name] = row[~np.isnan(row)]
+        b.refined = Refined(b.kind, b.order, arrays["values"], arrays["extrapolated"],
+                            *(float(g[n][i]) for n in _REFINED_SCALARS), arrays["ratios"],
+                            arrays["seconds"], (), b.state0)

@@ -129,8 +129,10 @@ def _open(path):
         if head == _HDF5_SIGNATURE:
             raise ResultFileError(f"{path}: truncated or damaged HDF5 file ({size} bytes): "
                                   "recompute or copy it again", "truncated") from None
+        hint = (": a measured record (CSV) is read by stochastic.analyze (nlbeam analyze)"
+                if head[:1].isalpha() or head[:1] in (b"#", b'"') else "")
         raise ResultFileError(f"{path}: not an HDF5 file (first bytes {head[:8]!r}), not a "
-                              "result", "not-hdf5") from None
+                              f"result{hint}", "not-hdf5") from None
 
 
 def _format_of(h):
@@ -157,7 +159,9 @@ def verify_result(h, path, name):
             raise ResultFileError(f"{path}: this is {_KIND[have]}, use "
                                   f"{FORMATS[have][1]}", "wrong-kind")
         raise ResultFileError(f"{path}: not an nlbeam result file (format "
-                              f"{have!r}); {FORMATS[name][1]} reads {_KIND[name]}s", "unknown")
+                              f"{have!r}); {FORMATS[name][1]} reads {_KIND[name]} file; a "
+                              "measured record in HDF5 is read by stochastic.analyze",
+                              "unknown")
     newest = FORMATS[name][0]
     if version > newest:
         raise ResultFileError(f"{path}: written by format {version} "

@@ -19,7 +19,7 @@ _ORDER_COLOUR = {1: "C0", 2: "C1", 3: "C2", 4: "C3", 5: "C5", 6: "C4"}
 
 def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, label="delta",
                     unit="m", superharmonic_orders=(2, 3), scale=1e3, fig=None, stability=True,
-                    **map_kw):
+                    ax=None, path=None, **map_kw):
     """The PSD (top, log) and the periodic diagram (bottom, |x|max in mm) on one
     response-frequency axis: an order-n branch at excitation frequency f is drawn at f/n,
     the harmonic branch also at k f for each k in ``superharmonic_orders`` (thin, grey);
@@ -27,15 +27,26 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
     "1 forced" for the forced response in a narrow band) and joined to the point that
     explains it. ``matches`` default: ``map_peaks(psd, frc, excitation, **map_kw)``.
     ``stability=False`` draws every branch solid (for a diagram computed without Floquet
-    multipliers). Returns the Figure."""
+    multipliers). ``ax``: a pair of axes (PSD, diagram) to draw into (sharing x is the
+    caller's choice); else ``fig`` (its two panels are added) or a new figure. ``path``: also
+    write the figure (then closed if this call opened it). Returns the Figure."""
     import matplotlib.pyplot as plt
 
     f, P = (np.asarray(a, dtype=float) for a in psd)
     if matches is None:
         matches = map_peaks((f, P), frc, excitation, **map_kw)
-    if fig is None:
-        fig = plt.figure(figsize=(9, 7))
-    ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [1, 1]})
+    opened = fig is None and ax is None
+    if ax is not None:
+        try:
+            ax1, ax2 = ax
+        except (TypeError, ValueError):
+            raise ValueError("ax: give two axes (the PSD's and the diagram's), got "
+                             f"{ax!r}") from None
+        fig = ax1.figure
+    else:
+        if fig is None:
+            fig = plt.figure(figsize=(9, 7))
+        ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [1, 1]})
     pos = P > 0
     ax1.semilogy(f[pos], P[pos], color="k", lw=0.8, label=f"PSD of {label}")
     holds = _Holds(excitation)
@@ -43,6 +54,8 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
         for lo, hi in holds.bands:
             ax1.axvspan(lo, max(hi, lo + 1e-9), color="0.9", zorder=0,
                         label="excitation band" if (lo, hi) == holds.bands[0] else None)
+    hi = f_max if f_max is not None else float(f[-1])
+    matches = [m for m in matches if m.frequency <= hi]  # no legend entry for a peak not drawn
     seen = set()
     for m in matches:
         c = _KIND_COLOUR[m.kind]
@@ -55,8 +68,10 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
             txt = "1 forced"
         elif m.note == "multiple":
             txt = f"{m.order}\u00d7{m.explained_by:.4g}"
-        ax1.annotate(txt, (m.frequency, m.psd), textcoords="offset points", xytext=(0, 6),
-                     ha="center", fontsize=8, color=c)
+        near_axis = m.frequency < 0.04 * hi  # centred there, the text crosses the y axis
+        ax1.annotate(txt, (m.frequency, m.psd), textcoords="offset points",
+                     xytext=(3 if near_axis else 0, 6), ha="left" if near_axis else "center",
+                     fontsize=8, color=c)
         for ax in (ax1, ax2):
             ax.axvline(m.frequency, color=c, lw=0.6, ls=":")
     shown = pos & (f <= (f_max if f_max is not None else np.inf))  # y range from what is seen
@@ -99,8 +114,15 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
     ax2.set_xlabel("response frequency [Hz]")
     ax2.set_ylabel("|x|max [mm]")
     ax2.legend(fontsize=8, loc="upper right")
-    hi = f_max if f_max is not None else float(f[-1])
     ax1.set_xlim(0.0, hi)
     ax1.set_title("stochastic response peaks and the periodic diagram")
-    fig.tight_layout()
+    if ax is None:
+        fig.tight_layout()
+    if path is not None:
+        from .files import save_figure
+
+        if opened:
+            save_figure(fig, path)
+        else:
+            fig.savefig(path)
     return fig

@@ -4,14 +4,16 @@ from __future__ import annotations
 import numpy as np
 
 
-def plot_contact_fit(fit, delta, rate, force, *, ax=None, max_collisions=8):
+def plot_contact_fit(fit, delta, rate, force, *, ax=None, max_collisions=8, path=None):
     """Measured force (points) and the fitted law (lines) against indentation, one colour per
     collision (the first ``max_collisions``). delta m, rate m/s, force N as given to
-    ``nlbeam.identify.identify_contact``. Returns the Figure."""
+    ``nlbeam.identify.identify_contact``. ``ax``: draw there (else a new figure); ``path``:
+    also write the figure (then closed if this call opened it). Returns the Figure."""
     import matplotlib.pyplot as plt
 
     from nlbeam.identify import collisions
 
+    opened = ax is None
     if ax is None:
         fig, ax = plt.subplots(figsize=(6.0, 4.2))
     else:
@@ -31,5 +33,13 @@ def plot_contact_fit(fit, delta, rate, force, *, ax=None, max_collisions=8):
     ax.set_xlim(left=0.0)
     ax.set_ylim(bottom=min(0.0, float(np.min(np.concatenate([c.force for c in cs])))))
     ax.legend(fontsize=7, loc="upper left", frameon=False)
-    fig.tight_layout()
+    if opened:
+        fig.tight_layout()
+    if path is not None:
+        from .files import save_figure
+
+        if opened:
+            save_figure(fig, path)
+        else:
+            fig.savefig(path)
     return fig

@@ -16,7 +16,8 @@ import numpy as np
 
 from .units import axis_label, channel_unit, excitation_kind, log_limits, psd_label
 
-__all__ = ["excitation_psd", "response_psd", "pdf", "time_history", "channel_psds"]
+__all__ = ["excitation_psd", "response_psd", "pdf", "time_history", "channel_psds", "kept_time",
+           "TIME_LABEL"]
 
 
 def _figure(ax, figsize=(6.4, 4.0)):
@@ -152,8 +153,19 @@ def pdf(result, ch="delta", *, ax=None, path=None, log=False):
     return _finish(fig, path, opened)
 
 
+#: the time axis of every history figure: the window of keep_history, after the transient
+TIME_LABEL = axis_label("t after the transient", "s")
+
+
+def kept_time(result):
+    """The history's times (s) counted from the end of the transient, as keep_history."""
+    return np.asarray(result.history["t"], float) - (float(result.t_start)
+                                                     + float(result.transient))
+
+
 def time_history(result, channels=("y", "x"), *, ax=None, path=None):
-    """The kept time window (simulate(..., keep_history=(t0, t1))) of the given channels,
+    """The kept time window (simulate(..., keep_history=(t0, t1)), drawn against the time
+    after the transient, as the window is given) of the given channels,
     e.g. the base motion y and the beam x as in the paper's Fig. 8. Channels of one unit share
     the axis; a second unit gets its own axis on the right."""
     h = result.history
@@ -176,15 +188,16 @@ def time_history(result, channels=("y", "x"), *, ax=None, path=None):
     if len(units) == 2:
         axes[units[1]] = ax.twinx()
     handles = []
+    t = kept_time(result)
     for k, ch in enumerate(channels):
         _, unit, sc = channel_unit(ch, kind)
-        handles += axes[unit].plot(h["t"], h[ch] * sc, lw=0.8, color=f"C{k}",
+        handles += axes[unit].plot(t, h[ch] * sc, lw=0.8, color=f"C{k}",
                                    label=f"{ch} [{unit}]")
-    ax.set_xlabel(axis_label("t", "s"))
+    ax.set_xlabel(TIME_LABEL)
     for unit, a in axes.items():
         names = ", ".join(ch for ch in channels if channel_unit(ch, kind)[1] == unit)
         a.set_ylabel(axis_label(names, unit))
-    ax.set_xlim(h["t"][0], h["t"][-1])
+    ax.set_xlim(t[0], t[-1])
     ax.legend(handles=handles, frameon=False, ncols=len(channels))
     return _finish(fig, path, opened)
 

@@ -12,8 +12,9 @@ from .. import defaults
 from ..compare import map_peaks
 from ..files import write_text_atomic
 from ..plots.scene import scene_figure
-from .numbers import bifurcation_error, error_bound, with_error, xmax_error
-from .schema import build_noise, default_f_max
+from .bifurcation_list import bifurcation_rows
+from .numbers import with_error
+from .schema import build_model, default_f_max, excitation_for_peaks
 
 __all__ = ["write_outputs", "write_table", "distinct"]
 
@@ -25,11 +26,21 @@ def _by_variant(scene, jobs, results):
     for label, m, p, s in scene.variants():
         paths = {k: next((j.path for j in jobs if j.kind == k and j.variant == label), None)
                  for k in ("periodic", "stochastic")}
-        per = results[paths["periodic"]] if paths["periodic"] else None
-        sto = results[paths["stochastic"]] if paths["stochastic"] else None
+        per = results[paths["periodic"]] if paths["periodic"] and results else None
+        sto = results[paths["stochastic"]] if paths["stochastic"] and results else None
         out.append((label, m, p, s, per, sto, paths))
     return out
 
+
+# the header of a table with no rows (e.g. a diagram without bifurcations)
+_EMPTY_COLUMNS = {
+    "moments": ["variant", "channel", "mean", "std", "skewness", "kurtosis", "se_mean",
+                "se_std", "se_skewness", "se_kurtosis"],
+    "peaks": ["variant", "channel", "frequency_hz", "prominence_dec", "kind", "order",
+              "branch_frequency_hz", "stable", "distance_hz", "tolerance_hz", "xmax_m", "note",
+              "explained_by_hz"],
+    "bifurcations": ["variant", "branch", "order", "kind", "frequency_hz", "frequency_error_hz",
+                     "xmax_m", "note"]}
 
 #: which analyses each output reads
 _READS = {"frc": ("periodic",), "bifurcations": ("periodic",), "history": ("stochastic",),
@@ -53,27 +64,55 @@ def distinct(kind, variants):
     return out
 
 
+def planned_files(scene, jobs, out_dir):
+    """[(kind, path)] of every figure and table file ``write_outputs`` will write (a
+    per-variant figure of several variants: one file each, ``name_1.png``, ...)."""
+    from ..plots.scene import PER_VARIANT, suffixed
+
+    variants = _by_variant(scene, jobs, None)
+    out = []
+    for d in scene.figures:
+        path = os.path.join(out_dir, d["file"])
+        n = len(distinct(d["kind"], variants)) if d["kind"] in PER_VARIANT else 1
+        out += [(f"figure {d['kind']}", suffixed(path, i, n)) for i in range(n)]
+    out += [(f"table {d['kind']}", os.path.join(out_dir, d["file"])) for d in scene.tables]
+    return out
+
+
 def write_outputs(scene, jobs, results, out_dir, log):
     """Write every figure and table of ``scene`` from ``results`` (cache path -> result) to
     ``out_dir``; log each file. Returns the files written."""
     variants = _by_variant(scene, jobs, results)
+    measured = None
+    if scene.measured is not None:
+        from .measured import measured_result
+
+        measured = (scene.measured["label"],
+                    measured_result(scene.measured, dict(build_model(scene.model).parameters())))
     files = []
     for d in scene.figures:
-        files += scene_figure(scene.title, d, distinct(d["kind"], variants), out_dir)
+        files += scene_figure(scene.title, d, distinct(d["kind"], variants), out_dir,
+                              measured=measured)
     for d in scene.tables:
-        files.append(write_table(d, variants, out_dir))
+        files.append(write_table(d, variants, out_dir, measured=measured))
     for f in files:
         log(f"nlbeam: wrote {f}")
     return files
 
 
-def write_table(d, variants, out_dir):
+def write_table(d, variants, out_dir, measured=None):
     """Write the CSV table of one [[table]] entry ``d`` (moments, peaks or bifurcations) over
-    the variants it distinguishes. Returns its path."""
+    the variants it distinguishes, and for moments and peaks the ``measured`` record (label,
+    StochasticResult) if it has the channel (its peaks mapped to the first variant's diagram).
+    Returns its path."""
     kind = d["kind"]
     ch = d.get("channel", defaults.CHANNEL)
     rows = []
-    for label, m, p, s, per, sto, _ in distinct(kind, variants):
+    todo = distinct(kind, variants)
+    if measured is not None and kind in ("moments", "peaks") and ch in measured[1].channels:
+        label0, m0, p0, s0, per0 = todo[0][:5]
+        todo = todo + [(measured[0], m0, p0, s0, per0, measured[1], None)]
+    for label, m, p, s, per, sto, _ in todo:
         if kind == "moments":
             mo = sto.moments(ch)
             row = {"variant": label, "channel": ch,
@@ -89,20 +128,16 @@ def write_table(d, variants, out_dir):
             rows.append(row)
         elif kind == "peaks":
             f_max = d.get("f_max", default_f_max(p, s))
-            for pk in map_peaks(sto.psd(ch), per, build_noise(s), f_range=(0.0, f_max)):
+            for pk in map_peaks(sto.psd(ch), per, excitation_for_peaks(s),
+                                f_range=(0.0, f_max)):
                 row = pk.as_row()
                 if not d.get("stability", True):
                     row["stable"] = ""  # not asked for (and not computed when supported)
                 rows.append({"variant": label, "channel": ch, **row})
         else:
-            for b in per.bifurcations:
-                e_f = bifurcation_error(b, per)
-                rows.append({"variant": label, "kind": b.kind, "order": b.order,
-                             "frequency_hz": with_error(b.frequency, e_f),
-                             "xmax_m": with_error(b.xmax, xmax_error(b, per, e_f)),
-                             "tolerance": error_bound(e_f)})
+            rows += bifurcation_rows(per, label)
     buf = io.StringIO()
-    cols = list(dict.fromkeys(k for r in rows for k in r)) or ["variant"]
+    cols = list(dict.fromkeys(k for r in rows for k in r)) or _EMPTY_COLUMNS[kind]
     wr = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
     wr.writeheader()
     for r in rows:

@@ -118,8 +118,10 @@ def plan(scene, out_dir):
             inputs = {"analysis": "stochastic", "model": m, "stochastic": s,
                       "channels": channels, "outputs": outputs, "history": hist,
                       "code": code_fingerprint()}
+            under = (f"the record {os.path.basename(s['record'])} ({s['record_column']})"
+                     if "record" in s else f"band {s['band'][0]:g}-{s['band'][1]:g} Hz")
             jobs.append(_job("stochastic", label, inputs, cache,
-                             f"{s['duration']:g} s under band {s['band'][0]:g}-{s['band'][1]:g} Hz"
+                             f"{s['duration']:g} s under {under}"
                              f"{', low-pass %g Hz' % s['lowpass'] if s.get('lowpass') else ''}, "
                              f"seed {s['seed']}, channels {channels}, outputs {outputs}"
                              f"{', history %s s' % hist if hist else ''}"))
@@ -134,9 +136,11 @@ def _sha256_file(path):
     return h.hexdigest()
 
 
-def entry_record(inputs, path):
-    """The sidecar text of a cache entry: its inputs and the SHA-256 of its result file."""
-    return canonical_json({"inputs": inputs, "result_sha256": _sha256_file(path)}) + "\n"
+def entry_record(inputs, path, warned=()):
+    """The sidecar text of a cache entry: its inputs, the SHA-256 of its result file and the
+    warnings its computation gave (repeated when the entry is reused)."""
+    return canonical_json({"inputs": inputs, "result_sha256": _sha256_file(path),
+                           "warnings": [str(w) for w in warned]}) + "\n"
 
 
 def check_entry(path, inputs, kind):
@@ -191,8 +195,8 @@ def format_plan(scene, jobs, out_dir):
         lines.append(f"          -> {j.path}")
     if not jobs:
         lines.append("  (no analysis needed)")
-    for d in scene.figures:
-        lines.append(f"  write   figure {d['kind']}: {os.path.join(out_dir, d['file'])}")
-    for d in scene.tables:
-        lines.append(f"  write   table {d['kind']}: {os.path.join(out_dir, d['file'])}")
+    from .outputs import planned_files  # (the names a run writes, suffixes included)
+
+    for what, path in planned_files(scene, jobs, out_dir):
+        lines.append(f"  write   {what}: {path}")
     return "\n".join(lines)

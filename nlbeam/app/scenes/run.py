@@ -4,28 +4,42 @@ ones, and write the figures and tables (``run_scene``).
 """
 from __future__ import annotations
 
+import functools
+import json
 import os
-import sys
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import continuation
 import stochastic
-from stochastic.simulate import default_transient
 
 from ..files import remove_stale_temporaries, write_text_atomic
+from ..progress import Progress
 from ..sweeps import run_jobs
 from .outputs import write_outputs
 from .plan import CACHE_DIR, entry_record, plan
 from .schema import Scene, build_model, build_noise, load_scene
 
-__all__ = ["RunReport", "run_scene", "compute", "load_result", "store_result", "STALE_AGE"]
+__all__ = ["RunReport", "run_scene", "compute", "compute_recorded", "load_result",
+           "store_result", "cached_warnings", "AnalysisWarning", "CachedResultWarning",
+           "STALE_AGE"]
 
 STALE_AGE = 3600.0  # s: older .tmp-* files in the output and cache folders are removed
 
 
 def compute(job_inputs):
-    """Run one analysis from its inputs (module level: runs in pool or Dask workers)."""
+    """Run one analysis from its inputs (module level: runs in pool or Dask workers).
+    Progress goes to ``job_inputs["_progress"]`` if given, or as (label, message) or (label,
+    (done, total)) to the queue ``job_inputs["_queue"]`` (a worker's channel to the parent)."""
+    queue = job_inputs.get("_queue")
+    if queue is not None:
+        label = job_inputs.get("_label", "")
+        job_inputs = dict(job_inputs)
+        if job_inputs["analysis"] == "periodic":
+            job_inputs["_progress"] = lambda msg: queue.put((label, str(msg)))
+        else:
+            job_inputs["_progress"] = lambda done, total: queue.put((label, (done, total)))
     kind = job_inputs["analysis"]
     model = build_model(job_inputs["model"])
     if kind == "periodic":
@@ -38,15 +52,37 @@ def compute(job_inputs):
             n_grid=p["n_grid"], segments=p["segments"], dt_scale=p["dt_scale"], **kw)
     s = job_inputs["stochastic"]
     hist = job_inputs["history"]
-    transient = s["transient"]
-    if transient is None:  # the history window is counted from its end
-        transient = default_transient(model)
-    keep = None if hist is None else (transient + hist[0], transient + hist[1])
-    return stochastic.simulate(model, build_noise(s), s["duration"], transient,
+    keep = None if hist is None else tuple(hist)  # s after the transient, as in simulate
+    return stochastic.simulate(model, build_noise(s), s["duration"], s["transient"],
                                outputs=tuple(job_inputs["outputs"]),
                                channels=tuple(job_inputs["channels"]), method=s["method"],
                                psd_resolution=s["psd_resolution"], keep_history=keep,
                                pdf_bins=s["pdf_bins"], progress=job_inputs.get("_progress"))
+
+
+def compute_recorded(job_inputs, reissue=True):
+    """(result of ``compute``, the distinct texts of the warnings it gave): the warnings are
+    issued again here, once each (``reissue``; a pool's parent issues them itself), and stored
+    with the cache entry so that a cached re-run repeats them."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = compute(job_inputs)
+    seen = {}
+    for w in caught:
+        seen.setdefault(str(w.message).strip(), w)
+    if reissue:
+        for w in seen.values():
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return result, list(seen)
+
+
+def cached_warnings(job):
+    """The warnings the original computation of a cached ``job`` gave (from its record)."""
+    try:
+        with open(job.path[:-3] + ".json", encoding="utf-8") as fh:
+            return [str(w) for w in json.loads(fh.read()).get("warnings", [])]
+    except (OSError, ValueError, AttributeError):
+        return []
 
 
 def load_result(job):
@@ -56,15 +92,16 @@ def load_result(job):
     return stochastic.load(job.path)
 
 
-def store_result(job, result, log=None):
-    """Write ``result`` to the cache file of ``job`` and, beside it (``.json``), its inputs
-    and the SHA-256 of the file; log a warning when the analysis reports failure."""
+def store_result(job, result, log=None, warned=()):
+    """Write ``result`` to the cache file of ``job`` and, beside it (``.json``), its inputs,
+    the SHA-256 of the file and the warnings ``warned`` of its computation; log a warning when
+    the analysis reports failure."""
     if log is not None and getattr(result, "success", True) is False:
         log(f"nlbeam: warning: {job.kind}{' ' + job.variant if job.variant else ''}: "
             f"{getattr(result, 'message', 'failed')}")
     os.makedirs(os.path.dirname(job.path), exist_ok=True)
     result.save(job.path)  # atomic (temporary name, then os.replace)
-    write_text_atomic(job.path[:-3] + ".json", entry_record(job.inputs, job.path))
+    write_text_atomic(job.path[:-3] + ".json", entry_record(job.inputs, job.path, warned))
 
 
 @dataclass
@@ -84,6 +121,65 @@ class RunReport:
         return len({j.path for j in self.jobs if j.cached})
 
 
+class AnalysisWarning(UserWarning):
+    """A warning an analysis gave in a worker process, issued again in the parent."""
+
+
+class CachedResultWarning(UserWarning):
+    """A warning of the computation of a result now taken from the cache, repeated."""
+
+
+def _reissued(outs, names):
+    """Issue here the warnings the workers recorded (once each, naming the analysis)."""
+    for (_, warned), name in zip(outs, names):
+        for text in warned:
+            warnings.warn(f"({name}) {text}", AnalysisWarning, stacklevel=3)
+    return outs
+
+
+def _run_parallel(todo, workers, scheduler, show, quiet, name_of):
+    """[(result, warnings)] of the jobs ``todo`` on a process pool or Dask (run_jobs), the
+    workers' progress (per branch, per simulated block) relayed to ``show`` through a
+    manager queue (local pool only: a Dask worker reports per analysis)."""
+    items = [dict(j.inputs) for j in todo]
+    names = [f"[{k}/{len(todo)}] {name_of(j)}" for k, j in enumerate(todo, start=1)]
+
+    def prog(done, total):
+        show.bar("nlbeam: analyses done", done, total)
+
+    func = functools.partial(compute_recorded, reissue=False)
+    if scheduler is not None or quiet:
+        return _reissued(run_jobs(func, items, workers=workers, scheduler=scheduler,
+                                  progress=prog), names)
+    import multiprocessing
+    import threading
+
+    lines = Progress(write=show)  # plain, throttled lines per analysis
+    with multiprocessing.Manager() as manager:
+        queue = manager.Queue()
+        for item, name in zip(items, names):
+            item["_queue"], item["_label"] = queue, name
+
+        def relay():
+            while True:
+                msg = queue.get()
+                if msg is None:
+                    return
+                label, what = msg
+                if isinstance(what, tuple):
+                    lines.bar(f"nlbeam:   {label}: simulated", what[0], what[1], "s")
+                else:
+                    show(f"nlbeam:   {label}: {what}")
+
+        thread = threading.Thread(target=relay, daemon=True)
+        thread.start()
+        try:
+            return _reissued(run_jobs(func, items, workers=workers, progress=prog), names)
+        finally:
+            queue.put(None)
+            thread.join(timeout=5.0)
+
+
 def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, scheduler=None,
               quiet=False, log=None):
     """Validate, plan, compute what is missing (sweep points in parallel, see
@@ -93,9 +189,7 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
     scene = path_or_scene if isinstance(path_or_scene, Scene) else load_scene(path_or_scene)
     out_dir = os.fspath(out_dir)
     if log is None:
-        def log(msg):
-            if not quiet:
-                print(msg, file=sys.stderr, flush=True)
+        log = Progress(quiet=quiet)  # lines; a bar for what advances, on a terminal
     jobs = plan(scene, out_dir)
     if dry_run:
         return RunReport(jobs=jobs, computed=0, wall_time=time.perf_counter() - t0)
@@ -105,41 +199,47 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
     for j in {j.path: j for j in jobs if j.problem}.values():
         log(f"nlbeam: warning: cache entry {j.path}: {j.problem}; recomputing it")
     todo = list({j.path: j for j in jobs if not j.cached}.values())  # equal keys: once
+    sharing = {}
+    for j in jobs:
+        sharing[j.path] = sharing.get(j.path, 0) + 1
+
+    def name_of(j):  # an analysis several variants share names no variant
+        return j.kind + (f" {j.variant}" if j.variant and sharing[j.path] == 1 else "")
+
+    for j in {j.path: j for j in jobs if j.cached}.values():  # as when first computed
+        name = name_of(j)
+        for text in cached_warnings(j):
+            warnings.warn(f"(cached {name}, as first computed) {text}", CachedResultWarning,
+                          stacklevel=2)
     if todo:
-        log(f"nlbeam: {scene.title}: computing {len(todo)} of {len(jobs)} analyses")
+        title = scene.title if scene.title.startswith("nlbeam") else f"nlbeam: {scene.title}"
+        log(f"{title}: computing {len(todo)} of {len(jobs)} analyses")
     results = {}
-    if todo:
-        if scene.sweep is not None and len(todo) > 1 or scheduler is not None:
-            w = workers if workers is not None else (scene.sweep or {}).get("workers")
-
-            def prog(done, total):
-                log(f"nlbeam: {done}/{total} analyses done")
-
-            outs = run_jobs(compute, [j.inputs for j in todo], workers=w, scheduler=scheduler,
-                            progress=prog)
-            for j, r in zip(todo, outs):
-                store_result(j, r, log)
-                results[j.path] = r
-        else:
-            for n, j in enumerate(todo, start=1):
-                log(f"nlbeam: [{n}/{len(todo)}] {j.kind}{' ' + j.variant if j.variant else ''}: "
-                    f"{j.description}")
-                inputs = dict(j.inputs)
-                if j.kind == "stochastic" and not quiet:
-                    last = [0.0]
-
-                    def progress(done, total, last=last):
-                        if done >= total or time.perf_counter() - last[0] > 5.0:
-                            last[0] = time.perf_counter()
-                            log(f"nlbeam:   simulated {done:.4g} / {total:.4g} s")
-                    inputs["_progress"] = progress
-                elif j.kind == "periodic" and not quiet:
-                    inputs["_progress"] = lambda msg: log(f"nlbeam:   {msg}")
-                t = time.perf_counter()
-                r = compute(inputs)
-                store_result(j, r, log)
-                results[j.path] = r
-                log(f"nlbeam:   done in {time.perf_counter() - t:.1f} s")
+    show = log if isinstance(log, Progress) else Progress(write=log)
+    w = workers if workers is not None else (scene.sweep or {}).get("workers")
+    parallel = scheduler is not None or (
+        scene.sweep is not None and len(todo) > 1 and min(w or os.cpu_count() or 1,
+                                                          len(todo)) > 1)
+    if parallel:
+        outs = _run_parallel(todo, w, scheduler, show, quiet, name_of)
+        for j, (r, warned) in zip(todo, outs):
+            store_result(j, r, log, warned)
+            results[j.path] = r
+    else:
+        for n, j in enumerate(todo, start=1):
+            log(f"nlbeam: [{n}/{len(todo)}] {name_of(j)}: {j.description}")
+            inputs = dict(j.inputs)
+            if j.kind == "stochastic" and not quiet:
+                inputs["_progress"] = (lambda done, total, n=n: show.bar(
+                    f"nlbeam:   [{n}/{len(todo)}] simulated", done, total, "s"))
+            elif j.kind == "periodic" and not quiet:
+                inputs["_progress"] = lambda msg: show(f"nlbeam:   {msg}")
+            t = time.perf_counter()
+            r, warned = compute_recorded(inputs)
+            show.close()
+            store_result(j, r, log, warned)
+            results[j.path] = r
+            log(f"nlbeam:   done in {time.perf_counter() - t:.1f} s")
     for j in jobs:
         if j.path not in results:
             results[j.path] = load_result(j)

@@ -24,6 +24,14 @@ Scene file (every section and key optional; units SI, Hz)::
     duration = 60.0           # s kept, after `transient` s
     transient = 2.0
     psd_resolution = 0.25     # Hz
+    # record = "base.csv"     # instead of the noise: a measured base motion (CSV or HDF5 with
+    # record_time = "t"       # named columns, relative to the scene) as stochastic.Recorded
+    # record_column = "y"     # (band then only says where to look for peaks)
+    [measured]     # a measured response overlaid on psd, pdf, excitation_psd and compare
+    file = "rig.csv"          # figures and added to moments and peaks tables (stochastic.analyze)
+    channels = ["delta", "y"] # its columns, named like the channels (SI units)
+    time_column = "t"         # default "t"; label (default "measured"), band, psd_resolution,
+                              # pdf_bins optional
     [[figure]]     # kind: frc | excitation_psd | pdf | history | psd | compare
     kind = "psd"
     file = "fig9.png"
@@ -55,7 +63,8 @@ from ..files import canonical_json
 from ..sweeps import PARAMETERS
 
 __all__ = ["SceneError", "Scene", "load_scene", "build_model", "build_noise", "default_f_max",
-           "history_window", "history_channels", "FIGURE_KINDS", "TABLE_KINDS"]
+           "history_window", "history_channels", "excitation_for_peaks", "FIGURE_KINDS",
+           "TABLE_KINDS"]
 
 FIGURE_KINDS = ("frc", "excitation_psd", "pdf", "history", "psd", "compare")
 TABLE_KINDS = ("moments", "peaks", "bifurcations")
@@ -163,7 +172,15 @@ STOCHASTIC_KEYS = {"band": _pair(0.0), "rms": _real(0, lo_open=True, unit="m"),
                    "duration": _real(0, lo_open=True, unit="s"),
                    "transient": _real(0, unit="s"),
                    "psd_resolution": _real(0, lo_open=True, unit="Hz"),
-                   "method": _choice(METHODS), "pdf_bins": _int(10, 100000)}
+                   "method": _choice(METHODS), "pdf_bins": _int(10, 100000),
+                   "record": _file((".csv", ".h5", ".hdf5")), "record_time": _str,
+                   "record_column": _str}
+#: [measured]: a measured response record, analysed by stochastic.analyze and overlaid
+MEASURED_KEYS = {"file": _file((".csv", ".h5", ".hdf5")), "time_column": _str,
+                 "channels": _channels, "label": _str, "band": _pair(0.0),
+                 "psd_resolution": _real(0, lo_open=True, unit="Hz"),
+                 "pdf_bins": _int(10, 100000)}
+MEASURED_DEFAULTS = {"time_column": "t", "label": "measured"}
 FIGURE_KEYS = {"kind": _choice(FIGURE_KINDS), "file": _file((".png", ".pdf", ".svg")),
                "title": _str, "channel": _choice(CHANNELS), "channels": _channels,
                "f_max": _real(0, lo_open=True, unit="Hz"), "window": _pair(0.0, unit="s"),
@@ -241,6 +258,7 @@ class Scene:
     figures: list
     tables: list
     sweep: dict | None
+    measured: dict | None = None  # [measured] with the file's absolute path
 
     def variants(self):
         """[(label, model, periodic, stochastic)] one per sweep value (one if no sweep)."""
@@ -306,7 +324,8 @@ def load_scene(path) -> Scene:
             out[k] = val
         return out
 
-    allowed_top = ("title", "model", "periodic", "stochastic", "figure", "table", "sweep")
+    allowed_top = ("title", "model", "periodic", "stochastic", "figure", "table", "sweep",
+                   "measured")
     for k in doc:
         if k not in allowed_top:
             fail((k,), f"unknown key or section; allowed: {', '.join(allowed_top)}")
@@ -328,10 +347,21 @@ def load_scene(path) -> Scene:
         if "psd_level" in s:
             del stoch["rms"]
         stoch.update(s)
+        if "record" in stoch:
+            stoch.update(_record(path, stoch, fail))
         if stoch["psd_resolution"] is not None and stoch["psd_resolution"] * stoch["duration"] < 1:
             fail(("stochastic", "psd_resolution"),
                  f"needs Welch segments of {1 / stoch['psd_resolution']:g} s, longer than "
                  f"duration {stoch['duration']:g} s", stoch["psd_resolution"])
+    measured = None
+    if "measured" in doc:
+        measured = dict(MEASURED_DEFAULTS)
+        measured.update(section("measured", MEASURED_KEYS, doc["measured"], ("measured",)))
+        for req in ("file", "channels"):
+            if req not in measured:
+                fail(("measured",), f"missing key {req!r}")
+        measured["file"] = _columns_file(path, measured["file"], ("measured", "file"),
+                                         (measured["time_column"], *measured["channels"]), fail)
     figures, tables = [], []
     for name, keys, store in (("figure", FIGURE_KEYS, figures), ("table", TABLE_KEYS, tables)):
         items = doc.get(name, [])
@@ -390,7 +420,8 @@ def load_scene(path) -> Scene:
             fail(("sweep", "values"), "must be distinct", vals)
         sweep["values"] = clean
     scene = Scene(path=path, title=title, model=model, periodic=periodic, stochastic=stoch,
-                  figures=[d for _, d in figures], tables=[d for _, d in tables], sweep=sweep)
+                  figures=[d for _, d in figures], tables=[d for _, d in tables], sweep=sweep,
+                  measured=measured)
     # the objects validate the values together (e.g. hunt-crossley needs mu, Nyquist)
     for label, m, p, s in scene.variants():
         try:
@@ -404,6 +435,46 @@ def load_scene(path) -> Scene:
             where = f"{path}:{line}" if line else path
             raise SceneError(f"{where}: {sec}.{exc}" + (f" ({label})" if label else "")) from None
     return scene
+
+
+def _columns_file(scene_path, name, key, required, fail):
+    """The absolute path of a data file named in a scene (relative to the scene's folder),
+    checked to hold the ``required`` columns (SceneError naming ``key`` otherwise)."""
+    from ..files.columns import read_columns
+
+    full = os.path.join(os.path.dirname(os.path.abspath(scene_path)), name)
+    try:
+        read_columns(full, required=required)
+    except ValueError as exc:
+        fail(key, str(exc).replace(full, name))
+    return full
+
+
+def _record(scene_path, s, fail):
+    """record, record_time, record_column of a [stochastic] with a measured excitation: the
+    absolute path and the SHA-256 of its bytes (so that the cache key follows the data)."""
+    import hashlib
+
+    out = {"record_time": s.get("record_time", "t"), "record_column": s.get("record_column",
+                                                                             "y")}
+    out["record"] = _columns_file(scene_path, s["record"], ("stochastic", "record"),
+                                  (out["record_time"], out["record_column"]), fail)
+    from ..files.columns import read_columns
+
+    t = read_columns(out["record"])[out["record_time"]]
+    need = s["duration"] + (s["transient"] or 0.0)  # (a default transient: checked by simulate)
+    if t.size < 2 or t[-1] - t[0] < need * (1 - 1e-9):
+        fail(("stochastic", "duration"), f"transient + duration = {need:g} s exceed the record "
+             f"{s['record']} ({t[-1] - t[0] if t.size else 0:g} s long)", s["duration"])
+    with open(out["record"], "rb") as fh:
+        out["record_sha256"] = hashlib.sha256(fh.read()).hexdigest()
+    return out
+
+
+def excitation_for_peaks(s):
+    """What map_peaks and the comparison figure take as the excitation of a [stochastic]:
+    the noise, or for a measured record its ``band`` (Hz)."""
+    return tuple(s["band"]) if "record" in s else build_noise(s)
 
 
 # -- the objects the scene describes -------------------------------------------------
@@ -423,7 +494,13 @@ def build_model(spec):
 
 
 def build_noise(s):
-    """The stochastic.BandLimitedNoise of a [stochastic] section."""
+    """The excitation of a [stochastic] section: stochastic.BandLimitedNoise, or
+    stochastic.Recorded of its ``record`` file's columns (time in s, y in m)."""
+    if "record" in s:
+        from ..files.columns import read_columns
+
+        cols = read_columns(s["record"], required=(s["record_time"], s["record_column"]))
+        return stochastic.Recorded(cols[s["record_time"]], cols[s["record_column"]])
     kw = {"rms": s["rms"]} if "rms" in s else {"psd_level": s["psd_level"]}
     return stochastic.BandLimitedNoise(band=tuple(s["band"]), seed=s["seed"],
                                        lowpass=s.get("lowpass"), **kw)
