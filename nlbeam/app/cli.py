@@ -238,17 +238,8 @@ def _simulate(args):
     def progress(done, total):
         log.bar("nlbeam simulate: simulated", done, total, "s")
 
-    transient, keep = args.transient, None
-    if args.history is not None:  # a window after the transient, as a scene's history figure
-        from stochastic.simulate import default_transient
-
-        t0, t1 = args.history
-        if not 0 <= t0 < t1 <= args.duration:
-            raise ValueError(f"--history: must satisfy 0 <= T0 < T1 <= duration "
-                             f"({args.duration:g} s), got {t0:g} {t1:g}")
-        transient = default_transient(model) if transient is None else transient
-        keep = (transient + t0, transient + t1)
-    res = stochastic.simulate(model, noise, args.duration, transient, keep_history=keep,
+    keep = None if args.history is None else tuple(args.history)  # s after the transient
+    res = stochastic.simulate(model, noise, args.duration, args.transient, keep_history=keep,
                               channels=tuple(args.channels), method=args.method,
                               psd_resolution=args.psd_resolution, pdf_bins=args.pdf_bins,
                               rtol=args.rtol, atol=args.atol, dt=args.dt,

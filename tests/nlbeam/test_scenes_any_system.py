@@ -426,7 +426,7 @@ def test_a_moments_table_of_a_sweep_has_a_column_of_the_swept_value(tmp_path):
                 for b, s in (("0-100", 1e-4), ("50-100", 2e-4))]
     values = {"band=0-100": [0.0, 100.0], "band=50-100": [50.0, 100.0]}
     path = write_table({"kind": "moments", "file": "m.csv", "channel": "x"}, variants,
-                       str(tmp_path), ("band", "Hz", values))
+                       str(tmp_path), swept=("band", "Hz", values))
     with open(path) as fh:
         rows = list(csv.DictReader(fh))
     assert list(rows[0])[:3] == ["variant", "band", "channel"]

@@ -95,9 +95,9 @@ def scene_figure(scene_title, d, variants, out_dir, measured=None):
     distinct [(label, model, periodic, stochastic, diagram, stochastic result, job paths)]
     it shows. Returns the files written (``name_1.png``, ``name_2.png``, ... for a per-variant
     kind with more than one variant; the diagrams of a sweep, ``frc``, are overlaid in one
-    figure, one colour per value, the legend in units). ``measured``: (label, StochasticResult) of a measured
-    record drawn over the psd, pdf, excitation_psd and compare figures (black) where it has
-    the channel."""
+    figure, one colour per value, the legend in units). ``measured``: (label,
+    StochasticResult) of a measured record drawn over the psd, pdf, excitation_psd and
+    compare figures (black) where it has the channel."""
     files_backend()  # files only; an interactive session keeps its backend
     import matplotlib.pyplot as plt
 
