@@ -30,11 +30,12 @@ the stated error meets the target (``accuracy``: 6 significant digits by default
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from nlbeam.parameters import with_parameter
 
 from ._newton import ConvergenceError
 from .shooting import ShootingProblem, _problem_from_state
@@ -132,7 +133,7 @@ def _problem_at(model, amplitude, bif, parameter, integrator, segments):
     if parameter == "amplitude":
         amp = bif.value
     elif parameter != "frequency":
-        m = dataclasses.replace(model, **{parameter: float(bif.value)})
+        m = with_parameter(model, parameter, float(bif.value))
     prob, u = _problem_from_state(m, amp, freq, bif.order, bif.state0, segments, integrator,
                                   disc0=bif.disc0)
     if parameter != "frequency":
@@ -440,7 +441,7 @@ def _branch_problem(model, branch, i, integrator):
     A = float(branch.amplitude[i])
     p = float(branch.values[i])
     if branch.parameter not in ("frequency", "amplitude"):
-        m0 = dataclasses.replace(model, **{branch.parameter: p})
+        m0 = with_parameter(model, branch.parameter, p)
     seg = ~np.isnan(branch.boundaries[i])  # (NaN: fewer segments at this point than others)
     prob = ShootingProblem(model, A, f, branch.order, branch.boundaries[i][seg], integrator,
                            parameter=branch.parameter,

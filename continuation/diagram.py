@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import nlbeam
+from nlbeam.parameters import check_parameter
 from nlbeam.solver import period_step
 from nlbeam.summary import Summary, describe_value
 
@@ -905,11 +906,13 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
                        ds=0.02, ds_max=0.5, max_angle=0.2, max_points=1000, tol=1e-10,
                        bif_tol=1e-8, accuracy=None, **integrator_kw):
     """Follow a PeriodicSolution of ``model`` in ``parameter`` ('amplitude', 'frequency', or a
-    model field such as 'e' or 'K_hertz') over p_range, both ways, through corners as in
+    model parameter as nlbeam.parameters names it: 'e', 'K_hertz', 'gap' of the paper beam,
+    'elements[1].gap' of a System, ...) over p_range, both ways, through corners as in
     frequency_response. Returns a FrequencyResponse with one branch (and the bifurcations on
     it); a ContinuationWarning lists the parts of p_range the branch does not cover (for an
     order-1 solution; for higher orders the gaps next to ends where the tracer gave up).
     accuracy: as for frequency_response (errors in the units of the parameter)."""
+    check_parameter(model, parameter, extra=("frequency", "amplitude"))
     integrator = integrator or Integrator(**integrator_kw)
     lo, hi = map(float, p_range)
     tracer = Tracer(p_min=lo, p_max=hi, ds=ds, ds_max=ds_max, max_angle=max_angle,
@@ -918,7 +921,8 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
     prob, u0 = _problem_from_state(model, solution.amplitude, solution.frequency, solution.order,
                                    solution.state0, segments, integrator)
     prob.parameter = parameter
-    prob.scale_p = max(abs(prob.value()), 1e-300)
+    # the parameter's scale: its value, or the range where it starts at 0 (a gap of 0 m)
+    prob.scale_p = abs(prob.value()) if prob.value() != 0 else max(hi - lo, 1e-300)
     prob, u, p = _polish(prob, u0, prob.value(), tol)
     pts, loc, ends = _both_ways(tracer, prob, u, p)
     br = _to_branch(pts, solution.order, parameter, "start", ends)

@@ -21,6 +21,7 @@ import numpy as np
 
 import nlbeam
 from nlbeam.integrate import FlowMap
+from nlbeam.parameters import get_parameter, with_parameter
 from nlbeam._validate import choice
 from nlbeam.summary import Summary, field_rows
 from nlbeam.solver import Solver, period_step, phase_step
@@ -124,11 +125,12 @@ def clearance(model, states, y):
 class ShootingProblem(Problem):
     """The periodic-orbit problem R(u, p) = 0 of one model, excitation amplitude and order.
 
-    parameter: 'frequency' (Hz), 'amplitude' (m or N), or the name of a model field
-    (dataclasses.replace is used: 'e', 'K_hertz', ...). ``fixed`` holds the values of the other
-    two of (frequency, amplitude). boundaries: excitation phases of the segment starts.
-    The path follower's protocol (continuation.pathfollow.Problem), with its optional
-    ``variational``, ``jacobian_u`` and ``settle``.
+    parameter: 'frequency' (Hz), 'amplitude' (m or N), or a model parameter as
+    nlbeam.parameters names it ('e', 'K_hertz', 'gap', 'elements[1].gap', ...). ``fixed``
+    holds the values of the other two of (frequency, amplitude). boundaries: excitation
+    phases of the segment starts. The path follower's protocol
+    (continuation.pathfollow.Problem), with its optional ``variational``, ``jacobian_u`` and
+    ``settle``.
     """
 
     def __init__(self, model, amplitude, frequency, order, boundaries, integrator,
@@ -165,7 +167,7 @@ class ShootingProblem(Problem):
             return self.frequency
         if self.parameter == "amplitude":
             return self.amplitude
-        return float(getattr(self.base_model, self.parameter))
+        return get_parameter(self.base_model, self.parameter)
 
     def setup(self, p):
         """(model, amplitude, frequency) at parameter value p."""
@@ -175,7 +177,7 @@ class ShootingProblem(Problem):
             return self.base_model, float(p), self.frequency
         key, m = self._cache
         if key != p:
-            m = dataclasses.replace(self.base_model, **{self.parameter: float(p)})
+            m = with_parameter(self.base_model, self.parameter, float(p))
             self._cache = (p, m)
         return m, self.amplitude, self.frequency
 

@@ -339,6 +339,8 @@ class BeamImpact:
     m: kg (> 0); k: N/m (>= 0); b: kg/s (>= 0); K_hertz: N/m^1.5 (>= 0, 0 removes the stop);
     e: coefficient of restitution in (0, 1]; contact: 'hertz', 'lankarani-nikravesh' (paper
     eq. 4) or 'hunt-crossley' (needs mu, N s/m^2.5). clamp: the stop cannot pull (f >= 0).
+    gap: m between the beam at rest and the stop (0: the paper's stop touches it; negative: a
+    preload), delta = x - y - gap.
     """
 
     m: float = 37.75e-3
@@ -349,6 +351,7 @@ class BeamImpact:
     contact: str = "lankarani-nikravesh"
     mu: float | None = None
     clamp: bool = True
+    gap: float = 0.0
     system: System = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -363,7 +366,9 @@ class BeamImpact:
                              "see nlbeam.mu_from_e")
         if self.mu is not None:
             nonnegative("mu", self.mu, unit="N s/m^2.5")
-        el = Contact(0, self.contact, self.K_hertz, e=self.e, mu=self.mu, clamp=self.clamp)
+        finite("gap", self.gap)
+        el = Contact(0, self.contact, self.K_hertz, e=self.e, mu=self.mu, gap=self.gap,
+                     clamp=self.clamp)
         sysm = System([[self.m]], [[self.b]], [[self.k]], (el,), "base",
                       y_load=[self.k], yd_load=[self.b], output_dof=0, name="BeamImpact")
         object.__setattr__(self, "system", sysm)
@@ -376,7 +381,7 @@ class BeamImpact:
 
     def replace(self, **changes):
         kw = {k: getattr(self, k)
-              for k in ("m", "k", "b", "K_hertz", "e", "contact", "mu", "clamp")}
+              for k in ("m", "k", "b", "K_hertz", "e", "contact", "mu", "clamp", "gap")}
         kw.update(changes)
         return BeamImpact(**kw)
 
@@ -388,7 +393,8 @@ class BeamImpact:
     def parameters(self) -> dict:
         return {"model": "BeamImpact", "m": self.m, "k": self.k, "b": self.b,
                 "K_hertz": self.K_hertz, "e": self.e, "contact": self.contact,
-                "mu": "None" if self.mu is None else self.mu, "clamp": self.clamp}
+                "mu": "None" if self.mu is None else self.mu, "clamp": self.clamp,
+                **({"gap": self.gap} if self.gap != 0.0 else {})}
 
 
 @_model_protocol

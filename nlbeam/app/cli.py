@@ -1,4 +1,5 @@
-"""Command line: ``nlbeam demo | frc | simulate | compare | analyze | identify | run | figures``.
+"""Command line: ``nlbeam demo | frc | continue | refine | simulate | compare | analyze |
+identify | run | figures``.
 
 Units everywhere: SI (m, s, kg, N), frequencies in Hz. Progress goes to stderr; ``--quiet``
 silences it. A warning is one line on stderr (``nlbeam CMD: warning: ...``), --quiet or not. On
@@ -22,15 +23,52 @@ def _log(args):
     return Progress(quiet=args.quiet)
 
 
-def _model(args):
-    import nlbeam
+#: the paper beam's parameters the command line sets (--m, --K-hertz, ...): BeamImpact's
+_BEAM_OPTIONS = ("m", "k", "b", "K_hertz", "e", "gap", "contact", "mu")
 
-    kw = {}
-    if getattr(args, "e", None) is not None:
-        kw["e"] = args.e
-    if getattr(args, "K_hertz", None) is not None:
-        kw["K_hertz"] = args.K_hertz
-    return nlbeam.BeamImpact.paper(**kw)
+
+def _model(args):
+    """The model of --model SCENE (its [model]: any kind a scene takes) or of the paper beam's
+    options, with each --set NAME=VALUE applied (nlbeam.parameters names)."""
+    import nlbeam
+    from nlbeam.parameters import with_parameter
+
+    kw = {k: getattr(args, k) for k in _BEAM_OPTIONS if getattr(args, k, None) is not None}
+    if getattr(args, "model", None):
+        from .scenes.models import build_model
+        from .scenes.schema import load_scene
+
+        if kw:
+            raise ValueError(f"--model: give the model's parameters with --set NAME=VALUE, "
+                             f"not --{next(iter(kw)).replace('_', '-')}")
+        model = build_model(load_scene(args.model).model)
+    else:
+        model = nlbeam.BeamImpact.paper(**kw)
+    for item in getattr(args, "set", None) or []:
+        name, sep, value = item.partition("=")
+        try:
+            v = float(value)
+        except ValueError:
+            v = None
+        if not sep or v is None:
+            raise ValueError(f"--set: must be NAME=NUMBER (e.g. elements[1].gap=1e-3), "
+                             f"got {item!r}")
+        model = with_parameter(model, name.strip(), v)
+    return model
+
+
+def _check_knobs(args, section):
+    """Check the options that are keys of the scene section ``section`` ('periodic' or
+    'stochastic') with the scene's own checks: one line naming the option and the range."""
+    from .scenes.schema import SECTIONS
+
+    for name, check in SECTIONS[section].items():
+        v = getattr(args, name, None)
+        if v is None or check is None:
+            continue
+        _, err = check(list(v) if isinstance(v, tuple) else v)
+        if err:
+            raise ValueError(f"--{name.replace('_', '-')}: {err}, got {_shown(v)}")
 
 
 def _check_workers(args):
@@ -81,13 +119,17 @@ def _frc(args):
     import continuation
 
     log = _log(args)
+    _check_knobs(args, "periodic")
     model = _model(args)
     log(f"nlbeam frc: A = {args.amplitude:g} m, {args.f_range[0]:g}-{args.f_range[1]:g} Hz, "
         f"orders {args.orders}, {args.n_grid} grid frequencies (this can take minutes)")
+    from .defaults import PERIODIC
+
+    kw = {k: getattr(args, k) for k in PERIODIC if k not in ("amplitude", "f_range", "orders")}
     frc = continuation.frequency_response(model, args.amplitude, tuple(args.f_range),
-                                          orders=tuple(args.orders), n_grid=args.n_grid,
-                                          accuracy=_accuracy(args.accuracy),
-                                          progress=lambda msg: log(f"nlbeam frc:   {msg}"))
+                                          orders=tuple(args.orders), stability=args.stability,
+                                          progress=lambda msg: log(f"nlbeam frc:   {msg}"),
+                                          **kw)
     frc.save(args.out)
     log(f"nlbeam frc: {len(frc.branches)} branches, {frc.n_points} points, "
         f"{len(frc.bifurcations)} bifurcations in {frc.wall_time:.1f} s -> {args.out}")
@@ -112,19 +154,96 @@ def _frc(args):
     return 0
 
 
+#: the [periodic] keys that continue_parameter takes as well
+_CONTINUE_KNOBS = ("segments", "dt_scale", "method", "steps_per_contact", "rtol", "atol", "ds",
+                   "ds_max", "max_angle", "max_points", "tol", "bif_tol", "accuracy")
+
+
+def _continue(args):
+    import continuation
+
+    log = _log(args)
+    _check_knobs(args, "periodic")
+    model = _model(args)
+    lo, hi = args.lo, args.hi
+    if not lo < hi:
+        raise ValueError(f"range: must satisfy LO < HI, got {lo:g} {hi:g}")
+    log(f"nlbeam continue: the order-{args.order} orbit at {args.frequency:g} Hz, amplitude "
+        f"{args.amplitude:g}, continued in {args.parameter} over [{lo:g}, {hi:g}]")
+    kw = {k: getattr(args, k) for k in _CONTINUE_KNOBS}
+    integ = {k: kw.pop(k) for k in ("dt_scale", "method", "steps_per_contact", "rtol", "atol")}
+    sol = continuation.periodic_solution(model, args.amplitude, args.frequency, args.order,
+                                         segments=kw["segments"], error=False, **integ)
+    frc = continuation.continue_parameter(sol, args.parameter, (lo, hi), model=model,
+                                          **kw, **integ)
+    frc.save(args.out)
+    log(f"nlbeam continue: {frc.n_points} points, {len(frc.bifurcations)} bifurcations in "
+        f"{frc.wall_time:.1f} s -> {args.out}")
+    if not args.quiet:
+        for b in frc.bifurcations:
+            err = b.error if b.error is not None else float("nan")
+            print(f"{b.kind:16s} order {b.order}  {args.parameter} = {b.value:.9g} +- "
+                  f"{err:.1e}  |x|max = {b.xmax:.6g}")
+    if args.plot:
+        from .plots.files import files_backend, save_figure
+        from .plots.frequency_response import plot_frequency_response
+
+        files_backend()
+        save_figure(plot_frequency_response(frc), args.plot)
+    return 0
+
+
+def _refine(args):
+    import continuation
+
+    log = _log(args)
+    frc = continuation.load(args.diagram)
+    model = _model(args)
+    want = {k: str(v) for k, v in model.parameters().items()}
+    have = {k: str(v) for k, v in frc.model_parameters.items()}
+    if want != have:
+        diff = sorted(k for k in set(want) | set(have) if want.get(k) != have.get(k))
+        raise ValueError(f"{args.diagram}: computed for another model (differs in "
+                         f"{', '.join(diff)}); give the model options of its nlbeam frc")
+    log(f"nlbeam refine: {args.diagram}: refining {' and '.join(args.kinds)} "
+        f"(target {args.target_digits:g} digits; this can take minutes)")
+    out = continuation.refine_bifurcations(
+        frc, model, kinds=tuple(args.kinds), orders=args.orders, segments=args.segments,
+        target_digits=args.target_digits)
+    frc.save(args.out)
+    if not args.quiet:
+        for b, r in out:
+            if isinstance(r, Exception):
+                print(f"{b.kind:16s} order {b.order}  f = {b.frequency:.9g} Hz  not refined: "
+                      f"{str(r).strip().splitlines()[0]}")
+            else:
+                print(f"{b.kind:16s} order {b.order}  f = {r.value:.10g} +- {r.tolerance:.1e} Hz"
+                      f"  ({r.digits:.1f} digits, {len(r.values)} levels)")
+    log(f"nlbeam refine: {sum(not isinstance(r, Exception) for _, r in out)} of {len(out)} "
+        f"refined -> {args.out}")
+    return 0
+
+
 def _simulate(args):
     import stochastic
 
     log = _log(args)
+    _check_knobs(args, "stochastic")
     model = _model(args)
-    noise = stochastic.BandLimitedNoise(band=tuple(args.band), rms=args.rms, seed=args.seed,
-                                        lowpass=args.lowpass)
+    level = {"rms": args.rms} if args.psd_level is None else {"psd_level": args.psd_level}
+    noise = stochastic.BandLimitedNoise(band=tuple(args.band), seed=args.seed,
+                                        lowpass=args.lowpass, amplitudes=args.amplitudes,
+                                        **level)
+
     def progress(done, total):
         log.bar("nlbeam simulate: simulated", done, total, "s")
 
-    res = stochastic.simulate(model, noise, args.duration, args.transient,
+    keep = None if args.history is None else tuple(args.history)  # s after the transient
+    res = stochastic.simulate(model, noise, args.duration, args.transient, keep_history=keep,
                               channels=tuple(args.channels), method=args.method,
-                              psd_resolution=args.psd_resolution,
+                              psd_resolution=args.psd_resolution, pdf_bins=args.pdf_bins,
+                              rtol=args.rtol, atol=args.atol, dt=args.dt,
+                              steps_per_contact=args.steps_per_contact,
                               progress=None if args.quiet else progress)
     res.save(args.out)
     log(f"nlbeam simulate: {res.n_impacts} impacts in {res.wall_time:.1f} s -> {args.out}")
@@ -230,6 +349,10 @@ def _run(args):
 
     _check_workers(args)
     scene = load_scene(args.scene)
+    if args.set:
+        from .scenes.schema import with_settings
+
+        scene = with_settings(scene, [_setting(item) for item in args.set])
     out = args.out or "."
     if args.dry_run:
         print(format_plan(scene, plan(scene, out), out))
@@ -239,6 +362,22 @@ def _run(args):
     _log(args)(f"nlbeam run: {rep.computed} computed, {rep.reused} reused, "
                f"{len(rep.files)} files in {rep.wall_time:.1f} s")
     return 0
+
+
+def _setting(item):
+    """(name, value) of a --set NAME=VALUE of nlbeam run; VALUE read as a TOML value
+    (1e-3, [0.0, 100.0], "rk4"), else as a string."""
+    import tomllib
+
+    name, sep, text = item.partition("=")
+    if not sep or not name.strip():
+        raise ValueError(f"--set: must be NAME=VALUE (e.g. elements[1].gap=1e-3 or "
+                         f"band=[0.0, 100.0]), got {item!r}")
+    try:
+        value = tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = text
+    return name.strip(), value
 
 
 def bundled_scenes():
@@ -280,10 +419,12 @@ def _shown(v):
 def _parser():
     # the defaults shared with the scene files (nlbeam.app.defaults: the analyses' own, read
     # from their signatures, and the paper's study); importing them loads the analyses
-    from nlbeam.vocabulary import CHANNELS, METHODS
+    import continuation
+    from nlbeam.vocabulary import CHANNELS, CONTACT_LAWS, METHODS
 
-    from .defaults import (CHANNEL, DEMO_DURATION, DEMO_WORKERS, MIN_PROMINENCE, MODEL,
-                           PERIODIC, SIMULATE_CHANNELS, STOCHASTIC)
+    from .defaults import (CHANNEL, DEMO_DURATION, DEMO_WORKERS, DERIVED, HELP,
+                           MIN_PROMINENCE, MODEL, PERIODIC, SIMULATE_CHANNELS, STOCHASTIC,
+                           signature_defaults)
     from .demo import demo_summary
 
     per, sto = PERIODIC, STOCHASTIC
@@ -320,58 +461,120 @@ def _parser():
     p.set_defaults(func=_demo)
 
     def model_opts(p):
-        p.add_argument("--e", type=float, default=None,
-                       help=f"coefficient of restitution (-), default {MODEL['e']:g}")
-        p.add_argument("--K-hertz", dest="K_hertz", type=float, default=None,
-                       help=f"Hertz contact stiffness (N/m^1.5), default {MODEL['K_hertz']:g}")
+        units = {"m": "kg", "k": "N/m", "b": "kg/s", "K_hertz": "N/m^1.5", "e": "-",
+                 "gap": "m", "mu": "N s/m^2.5"}
+        for name in _BEAM_OPTIONS:
+            flag = "--" + name.replace("_", "-")
+            if name == "contact":
+                p.add_argument(flag, choices=CONTACT_LAWS, default=None,
+                               help=f"contact law of the paper beam, default {MODEL['contact']}")
+                continue
+            shown = "none" if MODEL.get(name) is None else _shown(MODEL[name])
+            p.add_argument(flag, dest=name, type=float, default=None,
+                           help=f"paper beam: {name} ({units[name]}), default {shown}")
+        p.add_argument("--model", default=None, metavar="SCENE",
+                       help="take the model of this scene file's [model] (the paper beam, "
+                       "ModalBeam, a System written out or a factory; docs/usage.md)")
+        p.add_argument("--set", action="append", default=None, metavar="NAME=VALUE",
+                       help="set a model parameter by name (repeatable): m, k, b, K_hertz, e, "
+                       "gap, ... or elements[i].field of a System (e.g. elements[1].gap=1e-3)")
+
+    def knob_opts(p, table, skip):
+        """An option per key of a scene section (nlbeam.app.defaults: same names, defaults
+        and help; dashes for underscores)."""
+        for name, default in table.items():
+            if name in skip:
+                continue
+            flag = "--" + name.replace("_", "-")
+            shown = DERIVED[name] if default is None else _shown(default)
+            kw = {"default": default, "help": f"{HELP[name]}, default {shown}"}
+            if isinstance(default, bool):
+                kw["action"] = argparse.BooleanOptionalAction
+            elif isinstance(default, list):
+                kw.update(nargs=2, type=float, metavar=("LO", "HI")) if len(default) == 2 \
+                    and name != "orders" else kw.update(nargs="+", type=type(default[0]))
+            elif name == "method":
+                kw["choices"] = METHODS
+            elif name == "amplitudes":
+                kw["choices"] = ("random", "deterministic")
+            elif name == "accuracy":
+                kw["type"] = _accuracy
+            elif isinstance(default, int):
+                kw["type"] = int
+            else:
+                kw["type"] = float
+            p.add_argument(flag, dest=name, **kw)
 
     p = sub.add_parser("frc", parents=[common], help="periodic frequency-response diagram "
                        "(|x|max vs excitation frequency, orders 1..n) to HDF5",
                        description="Continuation of periodic solutions under y = A cos(2 pi f t): "
                        "branches of period n/f, stability, folds and period doublings. " + _UNITS)
-    p.add_argument("--amplitude", type=float, default=per["amplitude"],
-                   help=f"base amplitude A (m), default {_shown(per['amplitude'])}")
-    p.add_argument("--f-range", type=float, nargs=2, default=list(per["f_range"]),
-                   metavar=("LO", "HI"),
-                   help=f"excitation frequency range (Hz), default {_shown(per['f_range'])}")
-    p.add_argument("--orders", type=int, nargs="+", default=list(per["orders"]),
-                   help=f"orders n (period n/f), default {_shown(per['orders'])}")
-    p.add_argument("--n-grid", type=int, default=per["n_grid"],
-                   help=f"brute-force start frequencies, default {per['n_grid']}")
-    p.add_argument("--accuracy", default="default",
-                   help="significant digits of the fold / period-doubling frequencies: 'default' "
-                   "(6), 'high' (8), a number, or 'off' (no error estimates)")
+    knob_opts(p, per, ())
+    p.add_argument("--stability", action=argparse.BooleanOptionalAction, default=True,
+                   help="Floquet multipliers of every point (needed for period doublings and "
+                   "solid/dashed branches); default on")
     model_opts(p)
     p.add_argument("--out", default="frc.h5", help="HDF5 result file, default frc.h5")
     p.add_argument("--plot", default=None, help="also write the diagram (PNG/PDF/SVG)")
     p.set_defaults(func=_frc)
 
+    p = sub.add_parser("continue", parents=[common], help="follow a periodic orbit in any "
+                       "parameter (continuation.continue_parameter) to HDF5",
+                       description="Solve the periodic orbit of the given order at one "
+                       "frequency and amplitude, then follow it in PARAMETER over [lo, hi] both "
+                       "ways: branch, stability, folds, period doublings, grazing points. "
+                       "PARAMETER: frequency, amplitude, or a model parameter (m, k, b, "
+                       "K_hertz, e, gap, ... or elements[i].field of a System; a name that "
+                       "does not exist lists those that do). " + _UNITS)
+    p.add_argument("parameter", help="the parameter to continue (see above)")
+    p.add_argument("lo", type=float, help="lower end of its range (its SI unit)")
+    p.add_argument("hi", type=float, help="upper end of its range")
+    p.add_argument("--frequency", type=float, required=True,
+                   help="excitation frequency (Hz) of the starting orbit")
+    p.add_argument("--amplitude", type=float, default=per["amplitude"],
+                   help=f"{HELP['amplitude']}, default {_shown(per['amplitude'])}")
+    p.add_argument("--order", type=int, default=1,
+                   help="order n of the starting orbit (period n/f), default 1")
+    knob_opts(p, {k: per[k] for k in _CONTINUE_KNOBS}, ())
+    model_opts(p)
+    p.add_argument("--out", default="continuation.h5",
+                   help="HDF5 result file, default continuation.h5")
+    p.add_argument("--plot", default=None, help="also write the branch (PNG/PDF/SVG)")
+    p.set_defaults(func=_continue)
+
+    ref = signature_defaults(continuation.refine_bifurcations)
+    p = sub.add_parser("refine", parents=[common], help="refine the folds and period "
+                       "doublings of a diagram file to 7-9 digits (continuation."
+                       "refine_bifurcations)",
+                       description="Locate each fold / period doubling of a diagram of nlbeam "
+                       "frc again by an extended system at successively halved steps, "
+                       "extrapolate, and write the diagram with the refined values and their "
+                       "errors. Give the model options the diagram was computed with. " + _UNITS)
+    p.add_argument("diagram", help="HDF5 file of nlbeam frc")
+    p.add_argument("--kinds", nargs="+", choices=("fold", "period-doubling"),
+                   default=list(ref["kinds"]),
+                   help=f"bifurcations to refine, default {_shown(list(ref['kinds']))}")
+    p.add_argument("--orders", type=int, nargs="+", default=ref["orders"],
+                   help="orders to refine, default all")
+    p.add_argument("--target-digits", type=float, default=ref["target_digits"],
+                   help=f"significant digits aimed at, default {_shown(ref['target_digits'])}")
+    p.add_argument("--segments", type=int, default=ref["segments"],
+                   help=f"shooting segments per period, default {ref['segments']}")
+    model_opts(p)
+    p.add_argument("--out", default="refined.h5",
+                   help="HDF5 file of the refined diagram, default refined.h5")
+    p.set_defaults(func=_refine)
+
     p = sub.add_parser("simulate", parents=[common], help="stochastic response to band-limited "
                        "Gaussian base excitation (PSD, PDF, moments) to HDF5",
                        description="Long-record simulation under band-limited Gaussian base "
                        "excitation with a flat (optionally low-passed) PSD. " + _UNITS)
-    p.add_argument("--band", type=float, nargs=2, default=list(sto["band"]),
-                   metavar=("LO", "HI"),
-                   help=f"excitation band (Hz), default {_shown(sto['band'])}")
-    p.add_argument("--rms", type=float, default=sto["rms"],
-                   help=f"excitation rms (m), default {_shown(sto['rms'])}")
-    p.add_argument("--lowpass", type=float, default=sto["lowpass"],
-                   help="first-order low-pass corner (Hz) shaping the band (actuator), default "
-                   + ("none" if sto["lowpass"] is None else _shown(sto["lowpass"])))
-    p.add_argument("--seed", type=int, default=sto["seed"],
-                   help=f"random seed (integer >= 0), default {sto['seed']}")
-    p.add_argument("--duration", type=float, default=sto["duration"],
-                   help=f"record kept (s), default {_shown(sto['duration'])}")
-    p.add_argument("--transient", type=float, default=sto["transient"],
-                   help="discarded start (s), default " + (
-                       "10 decay times of the slowest mode (stochastic.simulate)"
-                       if sto["transient"] is None else _shown(sto["transient"])))
-    p.add_argument("--psd-resolution", type=float, default=sto["psd_resolution"],
-                   help="Welch bin (Hz), default " + (
-                       "max(0.05, 16 / duration) (stochastic.simulate)"
-                       if sto["psd_resolution"] is None else _shown(sto["psd_resolution"])))
-    p.add_argument("--method", choices=METHODS, default=sto["method"],
-                   help=f"integrator, default {sto['method']}")
+    knob_opts(p, sto, ())
+    p.add_argument("--history", type=float, nargs=2, default=None, metavar=("T0", "T1"),
+                   help="keep the time history of the channels in this window (s after the "
+                   "transient) in the result file, default none")
+    p.add_argument("--psd-level", type=float, default=None,
+                   help=f"{HELP['psd_level']}, default none (--rms sets the level)")
     p.add_argument("--channels", nargs="+", default=list(SIMULATE_CHANNELS),
                    help=f"any of {', '.join(CHANNELS)} (delta: penetration x - y, m; force: N); "
                    f"default {_shown(SIMULATE_CHANNELS)}")
@@ -460,6 +663,10 @@ def _parser():
                        "OUT/.nlbeam-cache by a hash of their inputs. " + _UNITS)
     p.add_argument("scene", help="scene file (.toml)")
     p.add_argument("--out", default=None, help="output folder (figures, tables, cache), default .")
+    p.add_argument("--set", action="append", default=None, metavar="NAME=VALUE",
+                   help="set a parameter of the scene by the sweeps' names (repeatable): "
+                   "amplitude, rms, band, band[1], duration, seed, e, gap, elements[1].gap, "
+                   "a factory's argument, ...; VALUE as in TOML (1e-3, [0.0, 100.0])")
     run_opts(p)
     p.set_defaults(func=_run)
 

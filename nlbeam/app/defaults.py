@@ -20,9 +20,9 @@ import stochastic
 
 from .compare import map_peaks
 
-__all__ = ["signature_defaults", "PERIODIC", "STOCHASTIC", "MODEL", "CHANNEL",
-           "MIN_PROMINENCE", "HISTORY_SECONDS", "HISTORY_CHANNELS", "SIMULATE_CHANNELS",
-           "DEMO_WORKERS", "DEMO_DURATION"]
+__all__ = ["signature_defaults", "HELP", "DERIVED", "PERIODIC", "STOCHASTIC", "MODEL",
+           "CHANNEL", "MIN_PROMINENCE", "HISTORY_SECONDS", "HISTORY_CHANNELS",
+           "SIMULATE_CHANNELS", "DEMO_WORKERS", "DEMO_DURATION"]
 
 
 def signature_defaults(func) -> dict:
@@ -37,18 +37,66 @@ _INTEGRATOR = signature_defaults(continuation.Integrator)
 _SIMULATE = signature_defaults(stochastic.simulate)
 
 #: [periodic] of a scene and ``nlbeam frc``: amplitude (m), f_range (Hz), the rest as
-#: continuation.frequency_response
+#: continuation.frequency_response and continuation.Integrator
 PERIODIC = {"amplitude": 1e-4, "f_range": [5.0, 150.0],
             "orders": list(_FREQUENCY_RESPONSE["orders"]),
             "n_grid": _FREQUENCY_RESPONSE["n_grid"],
             "segments": _FREQUENCY_RESPONSE["segments"],
-            "dt_scale": _INTEGRATOR["dt_scale"]}
+            "dt_scale": _INTEGRATOR["dt_scale"],
+            **{k: _INTEGRATOR[k] for k in ("method", "steps_per_contact", "rtol", "atol")},
+            **{k: _FREQUENCY_RESPONSE[k] for k in ("ds", "ds_max", "max_angle", "max_points",
+                                                   "tol", "bif_tol", "accuracy", "switch",
+                                                   "brute_force_grid")}}
 #: [stochastic] of a scene and ``nlbeam simulate``: the noise (band Hz, rms m, lowpass Hz,
 #: seed) and the record (duration s), the rest as stochastic.simulate
 STOCHASTIC = {"band": [0.0, 200.0], "rms": 1e-4, "lowpass": None, "seed": 1, "duration": 60.0,
               "transient": _SIMULATE["transient"],
               "psd_resolution": _SIMULATE["psd_resolution"],
-              "method": _SIMULATE["method"], "pdf_bins": _SIMULATE["pdf_bins"]}
+              "method": _SIMULATE["method"], "pdf_bins": _SIMULATE["pdf_bins"],
+              **{k: _SIMULATE[k] for k in ("rtol", "atol", "dt", "steps_per_contact")},
+              "amplitudes": "random"}
+#: what each key of [periodic] / [stochastic] (and the option of ``nlbeam frc`` / ``simulate``
+#: of the same name, dashes for underscores) means, with its unit: one text for the
+#: command line's --help; docs/usage.md says the same
+HELP = {
+    "amplitude": "excitation amplitude (m; N for a force-excited model)",
+    "f_range": "excitation frequency range (Hz)",
+    "orders": "orders n (period n/f) of the branches",
+    "n_grid": "brute-force start frequencies",
+    "segments": "shooting segments per period (multiple shooting)",
+    "dt_scale": "fixed step as a fraction of the default (0.5: half the step)",
+    "method": "integrator",
+    "steps_per_contact": "steps per contact duration",
+    "rtol": "relative tolerance of the adaptive method",
+    "atol": "absolute tolerance of the adaptive method (m)",
+    "ds": "first arclength step (scaled units)",
+    "ds_max": "largest arclength step (scaled units)",
+    "max_angle": "largest angle between successive tangents (rad)",
+    "max_points": "points per branch at most",
+    "tol": "Newton tolerance of a branch point",
+    "bif_tol": "relative bracket of a located bifurcation",
+    "accuracy": "significant digits of the fold / period-doubling frequencies: 'default' (6), "
+                "'high' (8), a number, or 'off' (no error estimates)",
+    "switch": "branch switching at period doublings",
+    "brute_force_grid": "start branches from integrations on the n_grid frequencies",
+    "band": "excitation band (Hz)",
+    "rms": "excitation rms (m; N for a force-excited model)",
+    "psd_level": "flat PSD level before the low-pass (m^2/Hz), instead of rms",
+    "lowpass": "first-order low-pass corner (Hz) shaping the band (actuator)",
+    "seed": "random seed (integer >= 0)",
+    "duration": "record kept (s)",
+    "transient": "discarded start (s)",
+    "psd_resolution": "Welch bin (Hz)",
+    "pdf_bins": "histogram bins of the PDF",
+    "dt": "sample step (s)",
+    "amplitudes": "the noise's line amplitudes: random (Rayleigh: a Gaussian process) or "
+                  "deterministic (the paper's method)",
+}
+#: what a default of None means (the analysis derives the value)
+DERIVED = {"steps_per_contact": "the solver's", "accuracy": "'default'",
+           "lowpass": "none", "transient": "10 decay times of the slowest mode "
+           "(stochastic.simulate)", "psd_resolution": "max(0.05, 16 / duration) "
+           "(stochastic.simulate)", "dt": "1 / (32 f_max of the noise)"}
 #: the paper's model (nlbeam.BeamImpact's defaults: m, k, b, K_hertz, e, contact, mu, clamp)
 MODEL = signature_defaults(nlbeam.BeamImpact)
 #: the channel of a figure, table or comparison that names none

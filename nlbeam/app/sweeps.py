@@ -8,24 +8,37 @@ they leave this process. ``scheduler``: address of a running Dask scheduler
 ``nlbeam[distributed]``. Without it, more than one job and ``workers != 1`` use a
 ``ProcessPoolExecutor`` of ``workers`` processes (default: the CPU count, at most the
 number of jobs); otherwise the jobs run in this process, one after another.
-The sweepable scene parameters are listed in ``PARAMETERS`` (see ``nlbeam.app.scenes``).
+The sweepable scene parameters are listed in ``PARAMETERS`` and ``BAND_EDGES``; those of a
+general system or a factory depend on the scene's [model] (``nlbeam.app.scenes.models``).
 """
 from __future__ import annotations
 
 import os
 
-__all__ = ["run_jobs", "PARAMETERS"]
+__all__ = ["run_jobs", "PARAMETERS", "BAND_EDGES"]
 
-#: sweepable scene parameters -> (section, key)
+#: sweepable scene parameters -> (section, key): the excitation's and the record's, and the
+#: paper beam's; the model's of other kinds come from the scene's [model]
+#: (nlbeam.app.scenes.models.model_parameters: ``elements[i].field`` of a System, a factory's
+#: keyword arguments), named as nlbeam.parameters names them
 PARAMETERS = {
     "amplitude": ("periodic", "amplitude"),
     "rms": ("stochastic", "rms"),
+    "psd_level": ("stochastic", "psd_level"),
     "band": ("stochastic", "band"),
     "seed": ("stochastic", "seed"),
     "lowpass": ("stochastic", "lowpass"),
+    "duration": ("stochastic", "duration"),
     "e": ("model", "e"),
     "K_hertz": ("model", "K_hertz"),
+    "m": ("model", "m"),
+    "k": ("model", "k"),
+    "b": ("model", "b"),
+    "mu": ("model", "mu"),
+    "gap": ("model", "gap"),
 }
+#: the band's edges -> (section, key, index)
+BAND_EDGES = {"band[0]": ("stochastic", "band", 0), "band[1]": ("stochastic", "band", 1)}
 
 
 def _client(scheduler, timeout):

@@ -70,7 +70,7 @@ def test_demo_is_a_short_nlbeam_figures(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("cmd", [[], ["frc"], ["simulate"], ["run"], ["figures"], ["compare"],
-                                 ["analyze"]])
+                                 ["analyze"], ["continue"], ["refine"]])
 def test_help_explains_units(cmd, capsys):
     with pytest.raises(SystemExit) as e:
         main(cmd + ["--help"])

@@ -14,7 +14,8 @@ __all__ = ["plot_frequency_response"]
 
 #: units of the continuation parameters on the x axis (amplitude: by excitation kind)
 _PARAMETER_UNITS = {"frequency": "Hz", "e": "-", "K_hertz": "N/m$^{1.5}$", "gap": "m",
-                    "m": "kg", "k": "N/m", "b": "kg/s", "mu": "N s/m$^{2.5}$"}
+                    "m": "kg", "k": "N/m", "b": "kg/s", "mu": "N s/m$^{2.5}$",
+                    "K": "N/m$^{1.5}$", "k3": "N/m$^3$"}
 
 
 def _response_label(params, unit):
@@ -86,7 +87,9 @@ for all but the last panel of a row). ``path``: also write the
     elif frc.parameter == "amplitude":
         ax.set_xlabel(f"{'force' if force else 'base'} amplitude [{'N' if force else 'm'}]")
     else:
-        ax.set_xlabel(f"{frc.parameter} [{_PARAMETER_UNITS.get(frc.parameter, '-')}]")
+        field = frc.parameter.rsplit(".", 1)[-1]  # elements[i].field: the field's unit
+        ax.set_xlabel(f"{frc.parameter} "
+                      f"[{_PARAMETER_UNITS.get(frc.parameter, _PARAMETER_UNITS.get(field, '-'))}]")
     ax.set_ylabel(_response_label(params, unit))
     known = all(b.stable is not None for b in frc.branches)
     what = "force amplitude" if force else "base amplitude"

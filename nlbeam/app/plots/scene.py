@@ -18,33 +18,67 @@ from .frequency_response import plot_frequency_response
 from .stochastic import TIME_LABEL, kept_time
 from .units import axis_label, channel_unit, excitation_kind, log_limits, psd_label
 
-__all__ = ["scene_figure", "suffixed", "variant_label", "PER_VARIANT"]
+__all__ = ["scene_figure", "suffixed", "variant_label", "overlay_diagrams", "PER_VARIANT"]
 
 
 #: the figure kinds drawn once per variant (the others draw every variant on one axis)
 PER_VARIANT = ("frc", "history", "compare")
 
 
-#: a swept parameter's unit as drawn: (unit, factor SI -> drawn)
+#: a swept parameter's unit as drawn: (unit, factor SI -> drawn); an element parameter
+#: ``elements[i].field`` by its field
 _SWEEP_UNITS = {"rms": ("mm", 1e3), "amplitude": ("mm", 1e3), "band": ("Hz", 1.0),
-                "lowpass": ("Hz", 1.0), "K_hertz": ("N/m^1.5", 1.0)}
+                "lowpass": ("Hz", 1.0), "K_hertz": ("N/m^1.5", 1.0), "gap": ("mm", 1e3),
+                "band[0]": ("Hz", 1.0), "band[1]": ("Hz", 1.0), "duration": ("s", 1.0),
+                "psd_level": ("mm^2/Hz", 1e6), "m": ("kg", 1.0), "k": ("N/m", 1.0),
+                "b": ("kg/s", 1.0), "e": ("", 1.0), "mu": ("N s/m^2.5", 1.0),
+                "K": ("N/m^1.5", 1.0), "k3": ("N/m^3", 1.0)}
 
 
 def variant_label(label, kind="base"):
     """A sweep variant's label ('rms=2.5e-05') in the units of the axes ('rms = 0.025 mm';
     under force excitation rms and amplitude are forces, N)."""
     name, sep, value = str(label).partition("=")
-    if not sep or name not in _SWEEP_UNITS:
+    field = name.rsplit(".", 1)[-1] if name.startswith("elements[") else name
+    if not sep or field not in _SWEEP_UNITS:
         return label
-    unit, factor = _SWEEP_UNITS[name]
-    if kind == "force" and name in ("rms", "amplitude"):
-        unit, factor = "N", 1.0
+    unit, factor = _SWEEP_UNITS[field]
+    if kind == "force" and name in ("rms", "amplitude", "psd_level"):
+        unit, factor = ("N^2/Hz", 1.0) if name == "psd_level" else ("N", 1.0)
     try:
         parts = [f"{float(v) * factor:g}" for v in (value.split("-") if name == "band"
                                                     else [value])]
     except ValueError:
         return label
-    return f"{name} = {'-'.join(parts)} {unit}"
+    return f"{name} = {'-'.join(parts)}" + (f" {unit}" if unit else "")
+
+
+def overlay_diagrams(ax, diagrams):
+    """The diagrams [(legend label, FrequencyResponse)] of a sweep on one axis, one colour
+    each: |x|max (mm) against frequency, stable solid, unstable dashed, the bifurcations as
+    small circles in the diagram's colour."""
+    for i, (label, frc) in enumerate(diagrams):
+        c = f"C{i}"
+        ax.plot([], [], "-", color=c, lw=1.3, label=label)
+        for b in frc.branches:
+            x, y = np.asarray(b.values), np.asarray(b.xmax) * 1e3
+            st = np.ones(len(x), dtype=bool) if b.stable is None else np.asarray(b.stable)
+            cuts = np.nonzero(np.diff(st.astype(int)))[0] + 1
+            for seg in np.split(np.arange(len(x)), cuts):
+                if seg.size == 0:
+                    continue
+                seg = np.r_[seg, seg[-1] + 1] if seg[-1] + 1 < len(x) else seg
+                ax.plot(x[seg], y[seg], "-" if st[seg[0]] else "--", color=c,
+                        lw=1.2 if st[seg[0]] else 0.8)
+        bf = [b for b in frc.bifurcations if b.kind != "grazing"]
+        if bf:
+            ax.plot([b.value for b in bf], [b.xmax * 1e3 for b in bf], "o", mfc="none",
+                    color=c, ms=4, mew=0.8)
+    ax.plot([], [], "k-", lw=1.2, label="stable")
+    ax.plot([], [], "k--", lw=0.8, label="unstable")
+    ax.set_xlabel("excitation frequency [Hz]")
+    ax.set_ylabel("|x|max [mm]")
+    ax.legend(fontsize=8)
 
 
 def suffixed(path, i, n):
@@ -60,9 +94,10 @@ def scene_figure(scene_title, d, variants, out_dir, measured=None):
     """Write the figure of one [[figure]] table ``d`` to ``out_dir``; ``variants``: the
     distinct [(label, model, periodic, stochastic, diagram, stochastic result, job paths)]
     it shows. Returns the files written (``name_1.png``, ``name_2.png``, ... for a per-variant
-    kind with more than one variant). ``measured``: (label, StochasticResult) of a measured
-    record drawn over the psd, pdf, excitation_psd and compare figures (black) where it has
-    the channel."""
+    kind with more than one variant; the diagrams of a sweep, ``frc``, are overlaid in one
+    figure, one colour per value, the legend in units). ``measured``: (label,
+    StochasticResult) of a measured record drawn over the psd, pdf, excitation_psd and
+    compare figures (black) where it has the channel."""
     files_backend()  # files only; an interactive session keeps its backend
     import matplotlib.pyplot as plt
 
@@ -71,6 +106,13 @@ def scene_figure(scene_title, d, variants, out_dir, measured=None):
     target = os.path.join(out_dir, d["file"])
     multi = len(variants) > 1
     title = d.get("title", scene_title)
+    if kind == "frc" and multi:  # a sweep's diagrams: one figure, one colour per value
+        fig, ax = plt.subplots(figsize=(9, 5))
+        overlay_diagrams(ax, [(variant_label(label, excitation_kind(per.model_parameters)),
+                               per) for label, m, p, s, per, sto, _ in variants])
+        ax.set_title(title)
+        fig.tight_layout()
+        return [save_figure(fig, target)]
     if kind in PER_VARIANT:
         written = []
         for i, (label, m, p, s, per, sto, _) in enumerate(variants):
@@ -87,7 +129,9 @@ def scene_figure(scene_title, d, variants, out_dir, measured=None):
                 f_max = d.get("f_max", default_f_max(p, s))
                 fig = plot_comparison(sto.psd(ch), per, excitation=excitation_for_peaks(s),
                                       label=ch, f_max=f_max, f_range=(0.0, f_max),
-                                      stability=d.get("stability", True))
+                                      stability=d.get("stability", True),
+                                      min_prominence=d.get("min_prominence",
+                                                           defaults.MIN_PROMINENCE))
                 fig.axes[0].set_title(t)
                 if measured is not None and ch in measured[1].channels:
                     fm, Pm = measured[1].psd(ch)

@@ -90,21 +90,27 @@ def write_outputs(scene, jobs, results, out_dir, log):
         measured = (scene.measured["label"],
                     measured_result(scene.measured, dict(build_model(scene.model).parameters())))
     files = []
+    swept = None
+    if scene.sweep is not None:
+        values = dict(zip((v[0] for v in variants), scene.sweep["values"]))
+        swept = (*scene.swept, values)
     for d in scene.figures:
         files += scene_figure(scene.title, d, distinct(d["kind"], variants), out_dir,
                               measured=measured)
     for d in scene.tables:
-        files.append(write_table(d, variants, out_dir, measured=measured))
+        files.append(write_table(d, variants, out_dir, measured=measured, swept=swept))
     for f in files:
         log(f"nlbeam: wrote {f}")
     return files
 
 
-def write_table(d, variants, out_dir, measured=None):
+def write_table(d, variants, out_dir, measured=None, swept=None):
     """Write the CSV table of one [[table]] entry ``d`` (moments, peaks or bifurcations) over
     the variants it distinguishes, and for moments and peaks the ``measured`` record (label,
     StochasticResult) if it has the channel (its peaks mapped to the first variant's diagram).
-    Returns its path."""
+    ``swept``: (name, unit, {label: value}) of a sweep: each row of a variant gets a column
+    named as the parameter with its value (SI units; a band as 'lo-hi' Hz). Returns its
+    path."""
     kind = d["kind"]
     ch = d.get("channel", defaults.CHANNEL)
     rows = []
@@ -129,13 +135,23 @@ def write_table(d, variants, out_dir, measured=None):
         elif kind == "peaks":
             f_max = d.get("f_max", default_f_max(p, s))
             for pk in map_peaks(sto.psd(ch), per, excitation_for_peaks(s),
-                                f_range=(0.0, f_max)):
+                                f_range=(0.0, f_max),
+                                min_prominence=d.get("min_prominence",
+                                                     defaults.MIN_PROMINENCE)):
                 row = pk.as_row()
                 if not d.get("stability", True):
                     row["stable"] = ""  # not asked for (and not computed when supported)
                 rows.append({"variant": label, "channel": ch, **row})
         else:
             rows += bifurcation_rows(per, label)
+    if swept is not None:
+        name, _, values = swept
+        for r in rows:
+            if r.get("variant") in values:
+                v = values[r["variant"]]
+                r[name] = "-".join(f"{x:.10g}" for x in v) if isinstance(v, list) else v
+        rows = [{"variant": r["variant"], **({name: r[name]} if name in r else {}), **r}
+                if "variant" in r else r for r in rows]
     buf = io.StringIO()
     cols = list(dict.fromkeys(k for r in rows for k in r)) or _EMPTY_COLUMNS[kind]
     wr = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 from .. import defaults
 from ..files import canonical_json, code_fingerprint, content_key
+from .models import model_inputs
 from .schema import history_channels, history_window
 
 __all__ = ["CACHE_DIR", "Job", "plan", "format_plan", "check_entry", "entry_record"]
@@ -49,13 +50,9 @@ class Job:
 
 
 def _model_inputs(spec):
-    """The model as keyed: a BeamImpact spec with the constructor's defaults filled in, so
-    a scene that writes a default out and one that leaves it share a cache entry."""
-    if spec.get("name", "BeamImpact") != "BeamImpact":
-        return spec
-    full = {k: v for k, v in defaults.MODEL.items() if v is not None}
-    full.update((k, v) for k, v in spec.items() if k != "name")
-    return full
+    """The model as keyed (models.model_inputs): the paper beam with the constructor's
+    defaults filled in, a factory with the digest of the system it returns."""
+    return model_inputs(spec, defaults.MODEL)
 
 
 def needs(scene):

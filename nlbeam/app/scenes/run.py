@@ -44,12 +44,12 @@ def compute(job_inputs):
     model = build_model(job_inputs["model"])
     if kind == "periodic":
         p = job_inputs["periodic"]
-        kw = {"stability": p.get("stability", True)}
+        kw = {k: v for k, v in p.items() if k not in ("amplitude", "f_range", "orders")}
+        kw.setdefault("stability", True)
         if job_inputs.get("_progress") is not None:
             kw["progress"] = job_inputs["_progress"]
         return continuation.frequency_response(
-            model, p["amplitude"], tuple(p["f_range"]), orders=tuple(p["orders"]),
-            n_grid=p["n_grid"], segments=p["segments"], dt_scale=p["dt_scale"], **kw)
+            model, p["amplitude"], tuple(p["f_range"]), orders=tuple(p["orders"]), **kw)
     s = job_inputs["stochastic"]
     hist = job_inputs["history"]
     keep = None if hist is None else tuple(hist)  # s after the transient, as in simulate
@@ -57,7 +57,9 @@ def compute(job_inputs):
                                outputs=tuple(job_inputs["outputs"]),
                                channels=tuple(job_inputs["channels"]), method=s["method"],
                                psd_resolution=s["psd_resolution"], keep_history=keep,
-                               pdf_bins=s["pdf_bins"], progress=job_inputs.get("_progress"))
+                               pdf_bins=s["pdf_bins"], progress=job_inputs.get("_progress"),
+                               **{k: s[k] for k in ("rtol", "atol", "dt", "steps_per_contact")
+                                  if k in s})
 
 
 def compute_recorded(job_inputs, reissue=True):

@@ -9,8 +9,8 @@ analysis in HDF5 under a key made of exactly its inputs, and reuses it.
 Scene file (every section and key optional; units SI, Hz)::
 
     title = "Fig. 9"
-    [model]        # the paper's BeamImpact; m, k, b, K_hertz, e, contact, mu, clamp
-    e = 0.5
+    [model]        # the paper's BeamImpact; m, k, b, K_hertz, e, contact, mu, clamp, gap
+    e = 0.5        # (or ModalBeam, a System written out, a factory: scenes.models)
     [periodic]     # continuation.frequency_response
     amplitude = 1e-4          # m
     f_range = [5.0, 150.0]    # Hz
@@ -39,32 +39,36 @@ Scene file (every section and key optional; units SI, Hz)::
     [[table]]      # kind: moments | peaks | bifurcations (CSV)
     kind = "moments"
     file = "moments.csv"
-    [sweep]        # one run per value; see nlbeam.app.sweeps.PARAMETERS
+    [sweep]        # one run per value; any name of sweep_parameters
     parameter = "rms"
     values = [5e-5, 1e-4]
 
-What each output needs and how the analyses are cached: ``nlbeam.app.scenes.plan``.
+Every key with its meaning: docs/usage.md ("Scene keys, section by section"; a test walks
+the schema against it). What each output needs and how the analyses are cached:
+``nlbeam.app.scenes.plan``.
 """
 from __future__ import annotations
 
 import copy
-import math
 import os
 import re
 import tomllib
 from dataclasses import dataclass
 
-import nlbeam
 import stochastic
-from nlbeam.vocabulary import BOUNDARY_CONDITIONS, CHANNELS, CONTACT_LAWS, METHODS
+from nlbeam.parameters import element_parameter
+from nlbeam.vocabulary import CHANNELS, METHODS
 
 from .. import defaults
 from ..files import canonical_json
-from ..sweeps import PARAMETERS
+from .checks import (_accuracy, _bool, _channels, _choice, _file, _int, _int_list, _pair,
+                     _real, _str)
+from ..sweeps import BAND_EDGES, PARAMETERS
+from .models import MODEL_KEYS, PARAMETER_UNITS, build_model, check_model, model_parameters
 
 __all__ = ["SceneError", "Scene", "load_scene", "build_model", "build_noise", "default_f_max",
            "history_window", "history_channels", "excitation_for_peaks", "FIGURE_KINDS",
-           "TABLE_KINDS"]
+           "TABLE_KINDS", "sweep_parameters", "SECTIONS", "with_settings"]
 
 FIGURE_KINDS = ("frc", "excitation_psd", "pdf", "history", "psd", "compare")
 TABLE_KINDS = ("moments", "peaks", "bifurcations")
@@ -75,97 +79,16 @@ class SceneError(ValueError):
 
 
 # -- schema --------------------------------------------------------------------------------
-def _real(lo=None, hi=None, lo_open=False, unit=""):
-    def check(v):
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            return None, "must be a number" + (f" ({unit})" if unit else "")
-        v = float(v)
-        if not math.isfinite(v):
-            return None, "must be finite"
-        if lo is not None and (v <= lo if lo_open else v < lo):
-            return None, f"must be {'>' if lo_open else '>='} {lo:g}" + (f" {unit}" if unit else "")
-        if hi is not None and v > hi:
-            return None, f"must be <= {hi:g}" + (f" {unit}" if unit else "")
-        return v, None
-    return check
-
-
-def _int(lo=None, hi=None):
-    def check(v):
-        if isinstance(v, bool) or not isinstance(v, int):
-            return None, "must be an integer"
-        if (lo is not None and v < lo) or (hi is not None and v > hi):
-            return None, f"must lie in [{lo}, {hi}]" if hi is not None else f"must be >= {lo}"
-        return int(v), None
-    return check
-
-
-def _choice(options):
-    def check(v):
-        if v not in options:
-            return None, f"must be one of {', '.join(map(repr, options))}"
-        return v, None
-    return check
-
-
-def _bool(v):
-    return (v, None) if isinstance(v, bool) else (None, "must be true or false")
-
-
-def _str(v):
-    return (v, None) if isinstance(v, str) else (None, "must be a string")
-
-
-def _pair(lo=0.0, strict_lo=False, unit="Hz"):
-    def check(v):
-        if not isinstance(v, list) or len(v) != 2 or any(
-                isinstance(x, bool) or not isinstance(x, (int, float)) for x in v):
-            return None, f"must be a pair [lo, hi] of numbers ({unit})"
-        a, b = float(v[0]), float(v[1])
-        if not (math.isfinite(a) and math.isfinite(b)) or not (a > lo if strict_lo else a >= lo) \
-                or not b > a:
-            return None, f"must satisfy {lo:g} {'<' if strict_lo else '<='} lo < hi ({unit})"
-        return [a, b], None
-    return check
-
-
-def _int_list(lo, hi):
-    def check(v):
-        if not isinstance(v, list) or not v or any(
-                isinstance(x, bool) or not isinstance(x, int) or not lo <= x <= hi for x in v):
-            return None, f"must be a non-empty list of integers in [{lo}, {hi}]"
-        return sorted(set(v)), None
-    return check
-
-
-def _channels(v):
-    if not isinstance(v, list) or not v or any(c not in CHANNELS for c in v):
-        return None, f"must be a non-empty list of channels from {', '.join(CHANNELS)}"
-    return list(dict.fromkeys(v)), None
-
-
-def _file(exts):
-    def check(v):
-        if not isinstance(v, str) or not v or os.path.isabs(v) or ".." in v.split("/"):
-            return None, "must be a relative file name"
-        if not v.lower().endswith(exts):
-            return None, f"must end with {' or '.join(exts)}"
-        return v, None
-    return check
-
-
-MODEL_KEYS = {"name": _choice(("BeamImpact", "ModalBeam")), "m": _real(0, lo_open=True, unit="kg"),
-              "k": _real(0, unit="N/m"), "b": _real(0, unit="kg/s"),
-              "K_hertz": _real(0, unit="N/m^1.5"), "e": _real(0, 1, lo_open=True),
-              "contact": _choice(CONTACT_LAWS), "mu": _real(0, unit="N s/m^2.5"), "clamp": _bool,
-              # name = "ModalBeam": ModalBeam.paper(...) (docs/modal_beam.md), m, k, b not taken
-              "n_modes": _int(1, 20), "bc": _choice(BOUNDARY_CONDITIONS),
-              "stop_ratio": _real(0, 1, lo_open=True), "zeta": _real(0), "gap": _real(unit="m")}
-MODAL_KEYS = ("n_modes", "bc", "stop_ratio", "zeta", "gap")
 PERIODIC_KEYS = {"amplitude": _real(0, lo_open=True, unit="m"),
                  "f_range": _pair(0.0, strict_lo=True), "orders": _int_list(1, 8),
-                 "n_grid": _int(3, 2000), "segments": _int(1, 64),
-                 "dt_scale": _real(0, lo_open=True)}
+                 "n_grid": _int(2, 2000), "segments": _int(1, 64),
+                 "dt_scale": _real(0, lo_open=True), "method": _choice(METHODS),
+                 "steps_per_contact": _real(0, lo_open=True), "rtol": _real(0, lo_open=True),
+                 "atol": _real(0, lo_open=True, unit="m"), "ds": _real(0, lo_open=True),
+                 "ds_max": _real(0, lo_open=True), "max_angle": _real(0, 3.2, lo_open=True),
+                 "max_points": _int(2), "tol": _real(0, lo_open=True),
+                 "bif_tol": _real(0, lo_open=True), "accuracy": _accuracy, "switch": _bool,
+                 "brute_force_grid": _bool}
 STOCHASTIC_KEYS = {"band": _pair(0.0), "rms": _real(0, lo_open=True, unit="m"),
                    "psd_level": _real(0, lo_open=True, unit="m^2/Hz"),
                    "lowpass": _real(0, lo_open=True, unit="Hz"), "seed": _int(0),
@@ -174,7 +97,11 @@ STOCHASTIC_KEYS = {"band": _pair(0.0), "rms": _real(0, lo_open=True, unit="m"),
                    "psd_resolution": _real(0, lo_open=True, unit="Hz"),
                    "method": _choice(METHODS), "pdf_bins": _int(10, 100000),
                    "record": _file((".csv", ".h5", ".hdf5")), "record_time": _str,
-                   "record_column": _str}
+                   "record_column": _str,
+                   "rtol": _real(0, lo_open=True), "atol": _real(0, lo_open=True, unit="m"),
+                   "dt": _real(0, lo_open=True, unit="s"),
+                   "steps_per_contact": _real(0, lo_open=True),
+                   "amplitudes": _choice(("random", "deterministic"))}
 #: [measured]: a measured response record, analysed by stochastic.analyze and overlaid
 MEASURED_KEYS = {"file": _file((".csv", ".h5", ".hdf5")), "time_column": _str,
                  "channels": _channels, "label": _str, "band": _pair(0.0),
@@ -184,13 +111,13 @@ MEASURED_DEFAULTS = {"time_column": "t", "label": "measured"}
 FIGURE_KEYS = {"kind": _choice(FIGURE_KINDS), "file": _file((".png", ".pdf", ".svg")),
                "title": _str, "channel": _choice(CHANNELS), "channels": _channels,
                "f_max": _real(0, lo_open=True, unit="Hz"), "window": _pair(0.0, unit="s"),
-               "stability": _bool}
+               "stability": _bool, "min_prominence": _real(0, lo_open=True)}
 TABLE_KEYS = {"kind": _choice(TABLE_KINDS), "file": _file((".csv",)),
               "channel": _choice(CHANNELS), "f_max": _real(0, lo_open=True, unit="Hz"),
-              "stability": _bool}
+              "stability": _bool, "min_prominence": _real(0, lo_open=True)}
 #: outputs that may set ``stability = false`` (all others that read the diagram need it)
 STABILITY_OPTIONAL = ("compare", "peaks")
-SWEEP_KEYS = {"parameter": _choice(tuple(PARAMETERS)), "values": None,
+SWEEP_KEYS = {"parameter": _str, "values": None,
               "workers": _int(1, 1024)}
 SECTIONS = {"model": MODEL_KEYS, "periodic": PERIODIC_KEYS, "stochastic": STOCHASTIC_KEYS,
             "sweep": SWEEP_KEYS}
@@ -264,19 +191,56 @@ class Scene:
         """[(label, model, periodic, stochastic)] one per sweep value (one if no sweep)."""
         if self.sweep is None:
             return [("", self.model, self.periodic, self.stochastic)]
-        sec, key = PARAMETERS[self.sweep["parameter"]]
+        sec, keys, _ = sweep_parameters(self.model)[self.sweep["parameter"]]
         out = []
         for v in self.sweep["values"]:
             parts = {"model": copy.deepcopy(self.model),
                      "periodic": copy.deepcopy(self.periodic),
                      "stochastic": copy.deepcopy(self.stochastic)}
             if parts[sec] is not None:
-                parts[sec][key] = v
-                if key == "rms" and sec == "stochastic":
-                    parts[sec].pop("psd_level", None)
+                _set(parts[sec], keys, v)
+                other = {"rms": "psd_level", "psd_level": "rms"}.get(keys[0])
+                if sec == "stochastic" and other:
+                    parts[sec].pop(other, None)
             label = f"{self.sweep['parameter']}={_fmt(v)}"
             out.append((label, parts["model"], parts["periodic"], parts["stochastic"]))
         return out
+
+    @property
+    def swept(self):
+        """(name, unit) of the swept parameter, or None without a sweep: a factory's
+        arguments have no known unit; the excitation's are N (N^2/Hz) for a force-excited
+        model."""
+        if self.sweep is None:
+            return None
+        name = self.sweep["parameter"]
+        if "factory" in self.model and name in self.model.get("args", {}):
+            return name, ""
+        field = name.rsplit(".", 1)[-1]
+        unit = PARAMETER_UNITS.get(name, PARAMETER_UNITS.get(field, ""))
+        if name in ("amplitude", "rms", "psd_level") and \
+                build_model(self.model).excitation_kind == "force":
+            unit = unit.replace("m", "N")
+        return name, unit
+
+
+def _set(d, keys, v):
+    for k in keys[:-1]:
+        d = d[k]
+    d[keys[-1]] = v
+
+
+def sweep_parameters(model):
+    """{name: (section, path of keys, check)} of what a [sweep] may vary in a scene whose
+    [model] spec is ``model``: the model's parameters (models.model_parameters) and the
+    excitation's and record's (nlbeam.app.sweeps.PARAMETERS)."""
+    out = {n: ("model", keys, chk) for n, (keys, chk) in model_parameters(model).items()}
+    for n, (sec, key) in PARAMETERS.items():
+        if sec != "model":
+            out[n] = (sec, (key,), SECTIONS[sec][key])
+    for n, (sec, key, i) in BAND_EDGES.items():
+        out[n] = (sec, (key, i), _real(0, unit="Hz"))
+    return out
 
 
 def _fmt(v):
@@ -332,9 +296,7 @@ def load_scene(path) -> Scene:
     title = doc.get("title", os.path.splitext(os.path.basename(path))[0])
     if not isinstance(title, str):
         fail(("title",), "must be a string", title)
-    model = section("model", MODEL_KEYS, doc.get("model", {}), ("model",))
-    if model.get("name") != "ModalBeam":
-        model.pop("name", None)
+    model = check_model(doc.get("model", {}), fail)
     periodic = stoch = None
     if "periodic" in doc:
         periodic = copy.deepcopy(PERIODIC_DEFAULTS)
@@ -384,6 +346,9 @@ def load_scene(path) -> Scene:
                      f"can do without stability ({d['kind']!r} shows it)", d["stability"])
             if name == "table" and "f_max" in d and d["kind"] != "peaks":
                 fail((name, i, "f_max"), "only a peaks table has a frequency range", d["f_max"])
+            if "min_prominence" in d and d["kind"] not in ("peaks", "compare"):
+                fail((name, i, "min_prominence"), "only a peaks table and a compare figure "
+                     "find peaks", d["min_prominence"])
             needs_p = d["kind"] in ("frc", "compare", "peaks", "bifurcations")
             needs_s = d["kind"] in ("excitation_psd", "pdf", "history", "psd", "compare",
                                     "moments", "peaks")
@@ -401,18 +366,21 @@ def load_scene(path) -> Scene:
         sweep = section("sweep", SWEEP_KEYS, doc["sweep"], ("sweep",))
         if "parameter" not in sweep or "values" not in sweep:
             fail(("sweep",), "needs parameter and values")
-        sec, key = PARAMETERS[sweep["parameter"]]
+        names = sweep_parameters(model)
+        if sweep["parameter"] not in names:
+            fail(("sweep", "parameter"), "not a parameter of this scene; the names that exist: "
+                 + ", ".join(names), sweep["parameter"])
+        sec, keys, chk = names[sweep["parameter"]]
         target = {"model": model, "periodic": periodic, "stochastic": stoch}[sec]
         if sec != "model" and target is None:
-            fail(("sweep", "parameter"), f"sweeps {sec}.{key} but the scene has no [{sec}]",
+            fail(("sweep", "parameter"), f"sweeps {sec}.{keys[0]} but the scene has no [{sec}]",
                  sweep["parameter"])
         vals = sweep["values"]
         if not isinstance(vals, list) or not vals:
             fail(("sweep", "values"), "must be a non-empty list", vals)
-        chk = SECTIONS[sec][key]
         clean = []
         for v in vals:
-            c, err = chk(v)
+            c, err = chk(v) if chk is not None else (v, None)
             if err:
                 fail(("sweep", "values"), f"each value: {err}", v)
             clean.append(c)
@@ -428,10 +396,19 @@ def load_scene(path) -> Scene:
             build_model(m)
             if s is not None:
                 build_noise(s)
-        except ValueError as exc:
+        except (ValueError, TypeError) as exc:
             key = str(exc).split(":", 1)[0].strip()
-            sec = "model" if key in MODEL_KEYS else "stochastic"
-            line = _line_of(text, (sec, key)) or _line_of(text, ("sweep", "values"))
+            el = element_parameter(key)
+            if el is not None:
+                sec, at = "model", ("model.elements", el[0], el[1])
+            elif "factory" in m:
+                sec, at = "model", ("model", "factory")
+                exc = f"factory: {m['factory']}(**args) failed: {exc}" \
+                    if not str(exc).startswith("factory:") else exc
+            else:
+                sec = "model" if key in MODEL_KEYS else "stochastic"
+                at = (sec, key)
+            line = _line_of(text, at) or _line_of(text, ("sweep", "values"))
             where = f"{path}:{line}" if line else path
             raise SceneError(f"{where}: {sec}.{exc}" + (f" ({label})" if label else "")) from None
     return scene
@@ -477,22 +454,40 @@ def excitation_for_peaks(s):
     return tuple(s["band"]) if "record" in s else build_noise(s)
 
 
+def with_settings(scene, settings) -> Scene:
+    """``scene`` with each (name, value) of ``settings`` set: a name of the sweeps
+    (sweep_parameters: the model's, the excitation's, the record's), the value checked like
+    the key it sets. Raises SceneError naming the setting."""
+    scene = copy.deepcopy(scene)
+    names = sweep_parameters(scene.model)
+    for name, value in settings:
+        if name not in names:
+            raise SceneError(f"{name}: not a parameter of this scene; the names that exist: "
+                             + ", ".join(names))
+        if scene.sweep is not None and scene.sweep["parameter"] == name:
+            raise SceneError(f"{name}: the scene sweeps it; change its [sweep] values instead")
+        sec, keys, chk = names[name]
+        target = getattr(scene, sec)
+        if target is None:
+            raise SceneError(f"{name}: sets {sec}.{keys[0]} but the scene has no [{sec}]")
+        v, err = chk(value) if chk is not None else (value, None)
+        if err:
+            raise SceneError(f"{name}: {err}, got {value!r}")
+        _set(target, keys, v)
+        other = {"rms": "psd_level", "psd_level": "rms"}.get(keys[0])
+        if sec == "stochastic" and other:
+            target.pop(other, None)
+    for label, m, p, s in scene.variants():
+        try:
+            build_model(m)
+            if s is not None:
+                build_noise(s)
+        except (ValueError, TypeError) as exc:
+            raise SceneError(f"{exc}" + (f" ({label})" if label else "")) from None
+    return scene
+
+
 # -- the objects the scene describes -------------------------------------------------
-def build_model(spec):
-    """The model of a [model] section (a BeamImpact, or ModalBeam.paper for name =
-    "ModalBeam"); the model's own checks raise ValueError naming the key."""
-    kw = {k: v for k, v in spec.items() if k != "name"}
-    if spec.get("name") == "ModalBeam":
-        for k in ("m", "k", "b"):
-            if k in kw:
-                raise ValueError(f"{k}: not a parameter of ModalBeam (calibrated to m, k, b)")
-        return nlbeam.ModalBeam.paper(**kw)
-    for k in MODAL_KEYS:
-        if k in kw:
-            raise ValueError(f"{k}: a ModalBeam parameter (set name = 'ModalBeam')")
-    return nlbeam.BeamImpact(**kw)
-
-
 def build_noise(s):
     """The excitation of a [stochastic] section: stochastic.BandLimitedNoise, or
     stochastic.Recorded of its ``record`` file's columns (time in s, y in m)."""
@@ -503,7 +498,8 @@ def build_noise(s):
         return stochastic.Recorded(cols[s["record_time"]], cols[s["record_column"]])
     kw = {"rms": s["rms"]} if "rms" in s else {"psd_level": s["psd_level"]}
     return stochastic.BandLimitedNoise(band=tuple(s["band"]), seed=s["seed"],
-                                       lowpass=s.get("lowpass"), **kw)
+                                       lowpass=s.get("lowpass"),
+                                       amplitudes=s.get("amplitudes", "random"), **kw)
 
 
 def default_f_max(p, s):
