@@ -20,3 +20,6 @@ __all__ = ["periodic_solution", "frequency_response", "continue_parameter", "loa
            "PeriodicSolution", "FrequencyResponse", "Branch", "Bifurcation", "Superharmonic",
            "Integrator", "ConvergenceError", "ContinuationWarning", "refine", "refine_bifurcations",
            "Refined"]
+from .curve import BifurcationCurve, Codim2, bifurcation_curve, load_curves  # noqa: E402
+
+__all__ += ["bifurcation_curve", "BifurcationCurve", "Codim2", "load_curves"]
