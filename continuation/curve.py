@@ -53,7 +53,10 @@ class BifurcationCurve:
     (n, 2N) complex (largest modulus first); state0 (n, 2N) the orbit's state at t = 0;
     phase (n,) the grazing contact's excitation phase (periods; NaN for other kinds);
     n_impacts (n,) contact onsets per period; exact (n,) bool: the point was placed at a
-    requested value (``at`` or a range end) exactly; special: the Codim2 points met;
+    requested value (``at`` or a range end) exactly; error (n,): the estimated integration
+    error of the frequency (Hz) at the start and the ``at`` points (twice its change when the
+    point is located again with both steps halved; NaN elsewhere or when not estimated);
+    special: the Codim2 points met;
     ends: why the trace stopped at the first and the last point ('left the frequency range',
     'left the parameter range', 'closed', 'step underflow', 'max_points');
     n_evaluations: shooting evaluations; wall_time (s)."""
@@ -70,6 +73,7 @@ class BifurcationCurve:
     phase: np.ndarray
     n_impacts: np.ndarray
     exact: np.ndarray
+    error: np.ndarray | None = None
     special: list = field(default_factory=list)
     ends: tuple = ("", "")
     f_range: tuple = (0.0, 0.0)
@@ -83,8 +87,14 @@ class BifurcationCurve:
     def at(self, value, rel=1e-9):
         """Frequencies (Hz) of the curve's points placed exactly at this second-parameter
         value (requested with ``at=``; a curve may cross a value more than once)."""
-        m = self.exact & (np.abs(self.values - value) <= rel * abs(value))
-        return self.frequency[m]
+        return self.frequency[self._at(value, rel)]
+
+    def error_at(self, value, rel=1e-9):
+        """The error estimates (Hz) of the frequencies ``at(value)``."""
+        return self.error[self._at(value, rel)]
+
+    def _at(self, value, rel):
+        return self.exact & (np.abs(self.values - value) <= rel * abs(value))
 
     def save(self, path):
         """Write to HDF5 (nlbeam.app.files.curves_hdf5; atomically)."""
@@ -152,9 +162,12 @@ class _Tracer:
                 dz = np.linalg.solve(np.vstack([st.J, row[None, :]]), -F)
             except np.linalg.LinAlgError:
                 break
-            if np.max(np.abs(dz)) > 0.5:  # far off: no wild jumps
-                dz *= 0.5 / np.max(np.abs(dz))
-            z = z + dz
+            # damped: at most 0.5 in the scaled states, 2 % in frequency, 0.1 in q, a
+            # fiftieth of a period in the grazing phase (far off: no wild jumps)
+            c = min(1.0, 0.5 / max(np.max(np.abs(dz[:s.n])), 1e-300),
+                    0.02 / max(abs(dz[s.n]), 1e-300), 0.1 / max(abs(dz[s.n + 1]), 1e-300),
+                    0.02 / max(abs(dz[-1]), 1e-300) if s.grazing else 1.0)
+            z = z + c * dz
         raise ConvergenceError(f"{s.kind} curve: corrector did not converge near "
                                f"{s.point(z)[0]:.9g} Hz, {s.parameter} = {s.point(z)[1]:.6g}")
 
@@ -370,6 +383,29 @@ def _detector(tr, special):
     return on_step
 
 
+def _point_error(model, sysm, amplitude, pt, integrator, segments, tol):
+    """Twice the change of the point's frequency (Hz) when it is located again at its
+    second-parameter value with both steps halved (NaN, with a warning, if that fails)."""
+    import dataclasses
+
+    A = pt.value if sysm.parameter == "amplitude" else amplitude
+    m = model if sysm.parameter == "amplitude" else dataclasses.replace(
+        model, **{sysm.parameter: pt.value})
+    try:
+        s2 = CurveSystem(m, sysm.kind, sysm.order, A, pt.frequency, pt.state0, sysm.parameter,
+                         integrator.refined(1), segments=segments,
+                         element=getattr(sysm, "element", None),
+                         phase=None if math.isnan(pt.phase) else pt.phase)
+        tr = _Tracer(s2, (0.5 * pt.frequency, 2 * pt.frequency), (-np.inf, np.inf), (), 0.05,
+                     1e-6, 0.3, 0.3, 1, tol, 10)
+        return 2.0 * abs(tr.start(1).frequency - pt.frequency)
+    except (ConvergenceError, nlbeam.IntegrationError) as exc:
+        warnings.warn(f"bifurcation_curve: no error estimate at {pt.frequency:.9g} Hz, "
+                      f"{sysm.parameter} = {pt.value:.6g}: not located with the step halved "
+                      f"({exc})", ContinuationWarning, stacklevel=3)
+        return float("nan")
+
+
 # --- front door -----------------------------------------------------------------------------------
 def _check_range(name, rng, unit, lo_open=0.0):
     try:
@@ -398,7 +434,8 @@ def _check_parameter(model, parameter):
 def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter="amplitude",
                       f_range=None, at=(), integrator=None, segments=1, ds=0.05, ds_min=1e-6,
                       ds_max=0.3, max_angle=0.3, max_points=400, tol=1e-9, max_iter=10,
-                      directions=(1, -1), element=None, phase=None, **integrator_kw):
+                      directions=(1, -1), element=None, phase=None, error=True,
+                      **integrator_kw):
     """The locus of a bifurcation in (frequency, parameter).
 
     bifurcation: a located point of a frequency diagram (a continuation.Bifurcation of kind
@@ -416,7 +453,8 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     excitation phase (periods) of the grazing contact (default: the local maximum of the
     penetration closest to zero on the start orbit). Integrator options as for
     periodic_solution (the diagram's integrator, for the curve to pass through its points).
-    Codimension-2 points met (Codim2: cusp, fold-flip, a curve meeting a grazing curve) are in
+    error: estimate the integration error of the frequency at the start and the ``at``
+    points (BifurcationCurve.error). Codimension-2 points met (Codim2: cusp, fold-flip, a curve meeting a grazing curve) are in
     ``special``. Returns a BifurcationCurve; a ContinuationWarning says where a trace stopped
     short of the ranges (step underflow or max_points).
     """
@@ -484,9 +522,11 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     if len(halves) == 2:
         (s1, p1), (s2, p2) = halves
         pts = p2[::-1] + [s1] + p1
+        pts_start = s1
         ends = (ends[1], ends[0])
     else:
         pts = [halves[0][0]] + halves[0][1]
+        pts_start = halves[0][0]
         ends = (ends[0], ends[0]) if ends[0] == "closed" else ("start", ends[0])
     stuck = [e for e in ends if e in ("step underflow", "max_points")]
     if stuck:
@@ -499,6 +539,11 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     amp = v if parameter == "amplitude" else np.full(len(pts), amplitude)
     mu = np.array([p.st.multipliers for p in pts]) if all(
         p.st.multipliers is not None for p in pts) else None
+    err = np.full(len(pts), np.nan)
+    if error:
+        for i, p in enumerate(pts):
+            if p.exact and (p is pts_start or any(abs(p.value - a) <= 1e-9 * abs(a) for a in at)):
+                err[i] = _point_error(model, sysm, amplitude, p, integrator, segments, tol)
     special.sort(key=lambda c: (c.value, c.frequency))
     for c in special:  # the curve point nearest to it
         c.index = int(np.argmin(np.hypot(np.log(f / c.frequency), (v - c.value) / (
@@ -508,7 +553,7 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
         xmax=np.array([p.st.xmax for p in pts]), multipliers=mu,
         state0=np.array([p.state0 for p in pts]), phase=np.array([p.phase for p in pts]),
         n_impacts=np.array([p.st.n_impacts for p in pts]),
-        exact=np.array([p.exact for p in pts]), special=special, ends=tuple(ends),
+        exact=np.array([p.exact for p in pts]), error=err, special=special, ends=tuple(ends),
         f_range=(f_lo, f_hi), p_range=(p_lo, p_hi),
         model_parameters=model.parameters(),
         settings={"amplitude": amplitude, "segments": segments, "ds": ds, "ds_max": ds_max,
