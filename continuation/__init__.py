@@ -23,3 +23,6 @@ __all__ = ["periodic_solution", "frequency_response", "continue_parameter", "loa
 from .curve import BifurcationCurve, Codim2, bifurcation_curve, load_curves  # noqa: E402
 
 __all__ += ["bifurcation_curve", "BifurcationCurve", "Codim2", "load_curves"]
+from .chart import StabilityChart, attractor_order, stability_chart  # noqa: E402
+
+__all__ += ["stability_chart", "StabilityChart", "attractor_order"]

@@ -58,7 +58,8 @@ class BifurcationCurve:
     point is located again with both steps halved; NaN elsewhere or when not estimated);
     special: the Codim2 points met;
     ends: why the trace stopped at the first and the last point ('left the frequency range',
-    'left the parameter range', 'closed', 'step underflow', 'max_points');
+    'left the parameter range', 'closed', 'step underflow', 'max_points',
+    'max_evaluations');
     n_evaluations: shooting evaluations; wall_time (s)."""
 
     kind: str
@@ -146,22 +147,36 @@ class _Tracer:
         self.max_points = max_points
         self.tol = tol
         self.max_iter = max_iter
+        self.max_evaluations = None
 
     # corrector: Newton on G(z) = 0 with one more equation c(z) = 0 (linear: row . z = rhs)
-    def correct(self, z, row, rhs):
+    def correct(self, z, row, rhs, J=None):
+        """Newton on G(z) = 0 with the linear condition row . z = rhs; a chord iteration
+        on the Jacobian J given (the previous point's), renewed when an iterate does not
+        halve the residual. Returns (CurveState at the solution, with its Jacobian;
+        iterations)."""
         s = self.s
+        res_prev = np.inf
+        fresh = J is None
         for it in range(self.max_iter):
-            st = s.evaluate(z)
+            st = s.evaluate(z, jac=J is None)
+            if J is None:
+                J, fresh = st.J, True
             F = np.r_[st.G, row @ z - rhs]
             res = float(np.max(np.abs(F)))
             if not np.isfinite(res):
                 break
             if res <= self.tol:
-                return st, it
+                return (st if st.J is not None else s.evaluate(z)), it
+            if not fresh and res > 0.5 * res_prev:
+                J = None  # the chord stalls: a new Jacobian here
+                continue
+            res_prev = res
             try:
-                dz = np.linalg.solve(np.vstack([st.J, row[None, :]]), -F)
+                dz = np.linalg.solve(np.vstack([J, row[None, :]]), -F)
             except np.linalg.LinAlgError:
                 break
+            fresh = False
             # damped: at most 0.5 in the scaled states, 2 % in frequency, 0.1 in q, a
             # fiftieth of a period in the grazing phase (far off: no wild jumps)
             c = min(1.0, 0.5 / max(np.max(np.abs(dz[:s.n])), 1e-300),
@@ -232,9 +247,11 @@ class _Tracer:
         while True:
             if len(pts) >= self.max_points:
                 return pts, "max_points"
+            if self.max_evaluations and s.n_evaluations >= self.max_evaluations:
+                return pts, "max_evaluations"
             z_pred = a.st.z + ds * a.t
             try:
-                st, it = self.correct(z_pred, a.t, a.t @ z_pred)
+                st, it = self.correct(z_pred, a.t, a.t @ z_pred, a.st.J)
                 t = _tangent(st.J, a.t)
                 if t @ a.t < self.cos_max:
                     raise ConvergenceError("angle")
@@ -251,7 +268,7 @@ class _Tracer:
                 row[k] = 1.0
                 try:
                     st2, _ = self.correct(a.st.z + (q - a.st.z[k]) / (b.st.z[k] - a.st.z[k])
-                                          * (b.st.z - a.st.z), row, q)
+                                          * (b.st.z - a.st.z), row, q, b.st.J)
                     b = self.make_point(st2, _tangent(st2.J, a.t), exact=True)
                 except ConvergenceError:
                     if why:
@@ -284,9 +301,9 @@ class _Tracer:
                 pts[-1] = b
             else:
                 s.renew_borders(b.st.z)
-            if it <= 2:
+            if it <= 3:  # chord iterations: linear convergence, a few more than Newton's
                 ds = min(ds * 1.5, self.ds_max)
-            elif it >= 5:
+            elif it >= 7:
                 ds = max(ds * 0.6, self.ds_min)
             a = b
 
@@ -312,7 +329,7 @@ def _locate(tr, a, b, fun, iters=40, rel=1e-9):
     for _ in range(iters):
         mid = 0.5 * (lo + hi)
         try:
-            st, _ = tr.correct(za + mid * e, e, e @ za + mid)
+            st, _ = tr.correct(za + mid * e, e, e @ za + mid, a.st.J)
         except ConvergenceError:
             break
         t = _tangent(st.J, a.t)
@@ -433,9 +450,9 @@ def _check_parameter(model, parameter):
 
 def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter="amplitude",
                       f_range=None, at=(), integrator=None, segments=1, ds=0.05, ds_min=1e-6,
-                      ds_max=0.3, max_angle=0.3, max_points=400, tol=1e-9, max_iter=10,
+                      ds_max=0.3, max_angle=0.3, max_points=400, tol=1e-9, max_iter=12,
                       directions=(1, -1), element=None, phase=None, error=True,
-                      **integrator_kw):
+                      max_evaluations=None, **integrator_kw):
     """The locus of a bifurcation in (frequency, parameter).
 
     bifurcation: a located point of a frequency diagram (a continuation.Bifurcation of kind
@@ -449,7 +466,8 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     The curve is followed both ways (``directions``) by pseudo-arclength continuation of the
     extended system (continuation.extended) in scaled unknowns: ds, ds_min, ds_max (step),
     max_angle (rad between tangents), max_points (per direction), tol (scaled residual),
-    max_iter (corrector). element, phase: for a grazing curve, the stop (element index) and
+    max_iter (corrector), max_evaluations (shooting evaluations in all, None: no limit; a
+    trace that reaches it ends 'max_evaluations'). element, phase: for a grazing curve, the stop (element index) and
     excitation phase (periods) of the grazing contact (default: the local maximum of the
     penetration closest to zero on the start orbit). Integrator options as for
     periodic_solution (the diagram's integrator, for the curve to pass through its points).
@@ -507,6 +525,11 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
                        element=element, phase=phase)
     tr = _Tracer(sysm, (f_lo, f_hi), (p_lo, p_hi), at, ds, ds_min, ds_max, max_angle,
                  max_points, tol, max_iter)
+    if max_evaluations is not None:
+        if int(max_evaluations) != max_evaluations or max_evaluations < 1:
+            raise ValueError(f"max_evaluations: must be an integer >= 1 or None, got "
+                             f"{max_evaluations!r}")
+        tr.max_evaluations = int(max_evaluations)
     special = []
     halves, ends = [], []
     snapshot = sysm.snapshot()
@@ -528,7 +551,7 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
         pts = [halves[0][0]] + halves[0][1]
         pts_start = halves[0][0]
         ends = (ends[0], ends[0]) if ends[0] == "closed" else ("start", ends[0])
-    stuck = [e for e in ends if e in ("step underflow", "max_points")]
+    stuck = [e for e in ends if e in ("step underflow", "max_points", "max_evaluations")]
     if stuck:
         warnings.warn(f"bifurcation_curve: the {kind} curve (order {order}) from "
                       f"{f0:.6g} Hz stopped short of the ranges ({', '.join(stuck)}): try a "

@@ -215,19 +215,14 @@ class CurveSystem:
         return e, ph
 
     # --- the system ----------------------------------------------------------------------------
-    def evaluate(self, z):
-        """A CurveState at z: G (D - 1,) and its Jacobian (D - 1, D), scaled."""
+    def evaluate(self, z, jac=True):
+        """A CurveState at z: G (D - 1,) and (with jac) its Jacobian (D - 1, D), scaled.
+        The rows of the test function (or of the grazing conditions) by forward differences
+        (step 1e-6 in the scaled unknowns): D more monodromies (or flows)."""
         n, D = self.n, self.D
         w = self.prob.scale_u
         u, f, p = self.unpack(z)
-        ev = self._evaluate(z, True)
-        J = np.zeros((D - 1, D))
-        J[:n, :n] = ev.Ju * w[None, :] / w[:, None]
-        J[:n, n] = ev.Jp * f / w
-        hq = 1e-7
-        zq = z.copy()
-        zq[n + 1] += hq
-        J[:n, n + 1] = (self._evaluate(zq, False).R - ev.R) / (hq * w)
+        ev = self._evaluate_full(z, jac)
         mu = self.prob.multipliers(ev.Ms) if ev.Ms else None
         if self.grazing:
             rows = self._grazing_rows
@@ -239,14 +234,29 @@ class CurveSystem:
                 return np.array([self._g(zz)])
 
             extra = np.array([bordered(singular_matrix(self.kind, M), self.b, self.c)])
+        G = np.r_[ev.R / w, extra]
+        if not jac:
+            return CurveState(z.copy(), G, None, mu, float(ev.xmax), int(ev.n_impacts))
+        J = np.zeros((D - 1, D))
+        J[:n, :n] = ev.Ju * w[None, :] / w[:, None]
+        J[:n, n] = ev.Jp * f / w
+        hq = 1e-7
+        zq = z.copy()
+        zq[n + 1] += hq
+        J[:n, n + 1] = (self._evaluate(zq, False).R - ev.R) / (hq * w)
         h = 1e-6
         for i in range(D):
-            zp, zm = z.copy(), z.copy()
+            zp = z.copy()
             zp[i] += h
-            zm[i] -= h
-            J[n:, i] = (rows(zp) - rows(zm)) / (2 * h)
-        G = np.r_[ev.R / w, extra]
+            J[n:, i] = (rows(zp) - extra) / h
         return CurveState(z.copy(), G, J, mu, float(ev.xmax), int(ev.n_impacts))
+
+    def _evaluate_full(self, z, jac):
+        """The shooting evaluation at z with the monodromy (and with jac dR/df)."""
+        u, f, p = self.unpack(z)
+        self._set(p)
+        self.n_evaluations += 1
+        return self.prob.evaluate(u, f, jac=True, jac_p=jac)
 
     def snapshot(self):
         """What restore() needs to put the system back (the problem may be renewed by adapt)."""
