@@ -151,38 +151,44 @@ class _Tracer:
 
     # corrector: Newton on G(z) = 0 with one more equation c(z) = 0 (linear: row . z = rhs)
     def correct(self, z, row, rhs, J=None):
-        """Newton on G(z) = 0 with the linear condition row . z = rhs; a chord iteration
-        on the Jacobian J given (the previous point's), renewed when an iterate does not
-        halve the residual. Returns (CurveState at the solution, with its Jacobian;
-        iterations)."""
+        """Newton on G(z) = 0 with the linear condition row . z = rhs; a quasi-Newton
+        iteration from the Jacobian J given (the previous point's) with Broyden's rank-one
+        updates, the Jacobian renewed when an iterate does not halve the residual. Returns
+        (CurveState at the solution, with its Jacobian; iterations)."""
         s = self.s
         res_prev = np.inf
+        A = None if J is None else np.vstack([J, row[None, :]])
         fresh = J is None
+        F_prev = dz = None
         for it in range(self.max_iter):
-            st = s.evaluate(z, jac=J is None)
-            if J is None:
-                J, fresh = st.J, True
+            st = s.evaluate(z, jac=A is None)
             F = np.r_[st.G, row @ z - rhs]
+            if A is None:
+                A, fresh = np.vstack([st.J, row[None, :]]), True
+            elif dz is not None:
+                A = A + np.outer(F - F_prev - A @ dz, dz) / (dz @ dz)  # Broyden
             res = float(np.max(np.abs(F)))
             if not np.isfinite(res):
                 break
             if res <= self.tol:
                 return (st if st.J is not None else s.evaluate(z)), it
             if not fresh and res > 0.5 * res_prev:
-                J = None  # the chord stalls: a new Jacobian here
+                A, dz = None, None  # stalls: a new Jacobian here
                 continue
             res_prev = res
             try:
-                dz = np.linalg.solve(np.vstack([J, row[None, :]]), -F)
+                step = np.linalg.solve(A, -F)
             except np.linalg.LinAlgError:
                 break
             fresh = False
             # damped: at most 0.5 in the scaled states, 2 % in frequency, 0.1 in q, a
             # fiftieth of a period in the grazing phase (far off: no wild jumps)
-            c = min(1.0, 0.5 / max(np.max(np.abs(dz[:s.n])), 1e-300),
-                    0.02 / max(abs(dz[s.n]), 1e-300), 0.1 / max(abs(dz[s.n + 1]), 1e-300),
-                    0.02 / max(abs(dz[-1]), 1e-300) if s.grazing else 1.0)
-            z = z + c * dz
+            c = min(1.0, 0.5 / max(np.max(np.abs(step[:s.n])), 1e-300),
+                    0.02 / max(abs(step[s.n]), 1e-300), 0.1 / max(abs(step[s.n + 1]), 1e-300),
+                    0.02 / max(abs(step[-1]), 1e-300) if s.grazing else 1.0)
+            dz = c * step
+            z = z + dz
+            F_prev = F
         raise ConvergenceError(f"{s.kind} curve: corrector did not converge near "
                                f"{s.point(z)[0]:.9g} Hz, {s.parameter} = {s.point(z)[1]:.6g}")
 
@@ -243,11 +249,12 @@ class _Tracer:
         pts = []
         a = p0
         ds = self.ds0
+        n0 = s.n_evaluations
         z_start = p0.st.z
         while True:
             if len(pts) >= self.max_points:
                 return pts, "max_points"
-            if self.max_evaluations and s.n_evaluations >= self.max_evaluations:
+            if self.max_evaluations and s.n_evaluations - n0 >= self.max_evaluations:
                 return pts, "max_evaluations"
             z_pred = a.st.z + ds * a.t
             try:
@@ -301,9 +308,9 @@ class _Tracer:
                 pts[-1] = b
             else:
                 s.renew_borders(b.st.z)
-            if it <= 3:  # chord iterations: linear convergence, a few more than Newton's
+            if it <= 4:  # quasi-Newton iterations: a few more than Newton's
                 ds = min(ds * 1.5, self.ds_max)
-            elif it >= 7:
+            elif it >= 8:
                 ds = max(ds * 0.6, self.ds_min)
             a = b
 
@@ -466,8 +473,8 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     The curve is followed both ways (``directions``) by pseudo-arclength continuation of the
     extended system (continuation.extended) in scaled unknowns: ds, ds_min, ds_max (step),
     max_angle (rad between tangents), max_points (per direction), tol (scaled residual),
-    max_iter (corrector), max_evaluations (shooting evaluations in all, None: no limit; a
-    trace that reaches it ends 'max_evaluations'). element, phase: for a grazing curve, the stop (element index) and
+    max_iter (corrector), max_evaluations (shooting evaluations per direction, None: no
+    limit; a trace that reaches it ends 'max_evaluations'). element, phase: for a grazing curve, the stop (element index) and
     excitation phase (periods) of the grazing contact (default: the local maximum of the
     penetration closest to zero on the start orbit). Integrator options as for
     periodic_solution (the diagram's integrator, for the curve to pass through its points).
