@@ -19,6 +19,8 @@ import nlbeam
 from ._newton import ContinuationWarning, ConvergenceError
 from .curve import bifurcation_curve
 from .diagram import frequency_response
+from nlbeam.solver import period_step
+
 from .shooting import Integrator, forcing, steady_state
 
 
@@ -58,26 +60,27 @@ class StabilityChart:
 
 def attractor_order(model, amplitude, frequency, *, integrator=None, max_order=6, tol=1e-6):
     """The order n (period n / f) of the periodic attractor reached from rest at this
-    amplitude (m or N) and frequency (Hz): the smallest n <= max_order after which the state
-    repeats to ``tol`` (relative to the orbit's size); 0 when none does (irregular, or a higher
-    order)."""
+    amplitude (m or N) and frequency (Hz): the smallest n <= max_order such that the states at
+    the next 2 max_order excitation periods repeat after n periods to ``tol`` (relative to the
+    orbit's size); tried after 8, 16, 24, 32 decay times of the linear structure; 0 when none
+    does (irregular, a higher order, or a transient slower than that)."""
     integrator = integrator or Integrator()
-    s = steady_state(model, amplitude, frequency, integrator=integrator)
     ex = forcing(amplitude, frequency)
     N = model.n_dof
-    states = [s]
-    for _ in range(max_order):
-        tr = nlbeam.flow(model, ex, states[-1], 0.0, 1.0 / frequency, method=integrator.method,
-                         steps_per_contact=integrator.steps_per_contact, warn=False)
-        states.append(tr.state)
-    S = np.array(states)
-    w = 2 * np.pi * frequency
-    scale = np.r_[np.full(N, np.abs(S[:, :N]).max()), np.full(N, np.abs(S[:, N:]).max() / w)]
-    scale = np.where(scale > 0, scale, 1.0)
-    Sn = S / np.r_[scale[:N], scale[N:] * w]
-    for n in range(1, max_order + 1):
-        if np.max(np.abs(Sn[n] - Sn[0])) < tol:
-            return n
+    s = steady_state(model, amplitude, frequency, integrator=integrator)
+    for _ in range(4):  # until the state repeats: 8 more decay times of the structure each
+        # the same discrete flow as steady_state (its step): one sample per period
+        spp = integrator.steps_per_period(model, frequency)
+        tr = integrator.integrate(model, ex, 2 * max_order / frequency,
+                                  period_step(frequency, spp or 1), x0=s,
+                                  store_every=spp or 1)
+        S = np.hstack([tr.x, tr.v])
+        scale = np.r_[np.full(N, max(np.abs(S[:, :N]).max(), 1e-300)),
+                      np.full(N, max(np.abs(S[:, N:]).max(), 1e-300))]
+        for n in range(1, max_order + 1):  # n-periodic over all 2 max_order periods
+            if np.max(np.abs(S[n:] - S[:-n]) / scale) < tol:
+                return n
+        s = steady_state(model, amplitude, frequency, x0=S[-1], integrator=integrator)
     return 0
 
 

@@ -31,7 +31,8 @@ __all__ = ["ResultFileError", "LegacyResultWarning", "NewerWriterWarning", "FORM
 # format name -> (current version, what the user calls to load it)
 FORMATS = {"nlbeam.frequency_response": (2, "continuation.load"),
            "nlbeam.stochastic.result": (2, "stochastic.load"),
-           "nlbeam.bifurcation_curves": (1, "continuation.load_curves")}
+           # first written stamped: version 2 (version 1 means unstamped, legacy)
+           "nlbeam.bifurcation_curves": (2, "continuation.load_curves")}
 _KIND = {"nlbeam.frequency_response": "a frequency-response result",
          "nlbeam.stochastic.result": "a stochastic result",
          "nlbeam.bifurcation_curves": "a bifurcation-curve result"}
