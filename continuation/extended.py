@@ -144,10 +144,11 @@ class CurveSystem:
 
     # --- pieces --------------------------------------------------------------------------------
     def _evaluate(self, z, jac):
+        """The shooting evaluation at z: R, with jac dR/du and the monodromy (no dR/df)."""
         u, f, p = self.unpack(z)
         self._set(p)
         self.n_evaluations += 1
-        return self.prob.evaluate(u, f, jac=jac, jac_p=jac)
+        return self.prob.evaluate(u, f, jac=jac, jac_p=False)
 
     def _monodromy(self, z):
         ev = self._evaluate(z, True)
@@ -217,46 +218,42 @@ class CurveSystem:
     # --- the system ----------------------------------------------------------------------------
     def evaluate(self, z, jac=True):
         """A CurveState at z: G (D - 1,) and (with jac) its Jacobian (D - 1, D), scaled.
-        The rows of the test function (or of the grazing conditions) by forward differences
-        (step 1e-6 in the scaled unknowns): D more monodromies (or flows)."""
+        dR/du from the variational equations; every other column by forward differences
+        (step 1e-6 in the scaled unknowns): one evaluation with the monodromy per unknown
+        gives the test function's row and, for frequency and parameter, dR/df and dR/dq
+        (grazing: one flow to the grazing phase per unknown, and two shooting evaluations)."""
         n, D = self.n, self.D
         w = self.prob.scale_u
-        u, f, p = self.unpack(z)
-        ev = self._evaluate_full(z, jac)
+        ev = self._evaluate_full(z)
         mu = self.prob.multipliers(ev.Ms) if ev.Ms else None
         if self.grazing:
-            rows = self._grazing_rows
-            extra = rows(z)
+            extra = self._grazing_rows(z)
         else:
             M = self.prob.monodromy(ev.Ms)
-
-            def rows(zz):
-                return np.array([self._g(zz)])
-
             extra = np.array([bordered(singular_matrix(self.kind, M), self.b, self.c)])
         G = np.r_[ev.R / w, extra]
         if not jac:
             return CurveState(z.copy(), G, None, mu, float(ev.xmax), int(ev.n_impacts))
         J = np.zeros((D - 1, D))
         J[:n, :n] = ev.Ju * w[None, :] / w[:, None]
-        J[:n, n] = ev.Jp * f / w
-        hq = 1e-7
-        zq = z.copy()
-        zq[n + 1] += hq
-        J[:n, n + 1] = (self._evaluate(zq, False).R - ev.R) / (hq * w)
         h = 1e-6
         for i in range(D):
             zp = z.copy()
             zp[i] += h
-            J[n:, i] = (rows(zp) - extra) / h
+            if self.grazing:
+                J[n:, i] = (self._grazing_rows(zp) - extra) / h
+                if i in (n, n + 1):
+                    J[:n, i] = (self._evaluate(zp, False).R - ev.R) / (h * w)
+                continue
+            Mp, evp = self._monodromy(zp)
+            J[n, i] = (bordered(singular_matrix(self.kind, Mp), self.b, self.c) - extra[0]) / h
+            if i in (n, n + 1):
+                J[:n, i] = (evp.R - ev.R) / (h * w)
         return CurveState(z.copy(), G, J, mu, float(ev.xmax), int(ev.n_impacts))
 
-    def _evaluate_full(self, z, jac):
-        """The shooting evaluation at z with the monodromy (and with jac dR/df)."""
-        u, f, p = self.unpack(z)
-        self._set(p)
-        self.n_evaluations += 1
-        return self.prob.evaluate(u, f, jac=True, jac_p=jac)
+    def _evaluate_full(self, z):
+        """The shooting evaluation at z with the monodromy (dR/du)."""
+        return self._evaluate(z, True)
 
     def snapshot(self):
         """What restore() needs to put the system back (the problem may be renewed by adapt)."""
