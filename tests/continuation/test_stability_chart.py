@@ -138,3 +138,15 @@ def test_chart_front_door_checks_its_input():
         C.stability_chart(m, (1e-5, 1e-4), (5.0, 150.0), amplitude=1e-3)
     with pytest.raises(ValueError, match="label_grid"):
         C.stability_chart(m, (1e-5, 1e-4), (5.0, 150.0), label_grid=(-1, 2))
+
+
+def test_bundled_chart_scene_is_valid_and_outside_nlbeam_figures():
+    import os
+
+    from nlbeam.app.cli import bundled_scenes
+
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    sc = load_scene(os.path.join(root, "figures", "extra", "paper_stability_chart.toml"))
+    assert sc.chart["p_range"] == [2e-5, 5e-4] and sc.chart["f_range"] == [5.0, 150.0]
+    assert [d["kind"] for d in sc.figures] == ["stability_chart"]
+    assert not any("stability_chart" in p for p in bundled_scenes()[1])
