@@ -85,8 +85,10 @@ def main():
     n_pts = sum(len(c.frequency) for c in chart.curves)
     print(f"reference diagram A = {A_REF:g} m: {len(frc.bifurcations)} bifurcations, "
           f"{t_diag:.1f} s CPU")
-    print(f"curves: {len(chart.curves)} ({', '.join(f'{k} {sum(c.kind == k for c in chart.curves)}' for k in ('fold', 'period-doubling', 'neimark-sacker', 'grazing'))}), "
-          f"{n_pts} points, {chart.n_evaluations} shooting evaluations, {t_curves:.1f} s CPU")
+    kinds = ", ".join(f"{k} {sum(c.kind == k for c in chart.curves)}"
+                      for k in ("fold", "period-doubling", "neimark-sacker", "grazing"))
+    print(f"curves: {len(chart.curves)} ({kinds}), {n_pts} points, {chart.n_evaluations} "
+          f"shooting evaluations, {t_curves:.1f} s CPU")
     print(f"labels: {len(lab.label_order)} attractors, {t_labels:.1f} s CPU; orders found "
           f"{dict(zip(*np.unique(lab.label_order, return_counts=True)))}")
     print(f"chart total: {t_diag + t_curves + t_labels:.1f} s CPU; not traced or in part: "

@@ -99,7 +99,7 @@ def _duplicate(curves, bf, amplitude, rel=1e-4):
 def stability_chart(model, p_range, f_range, orders=(1, 2, 3), *, amplitude=None,
                     kinds=("fold", "period-doubling", "neimark-sacker", "grazing"),
                     diagram=None, label_grid=(16, 6), integrator=None, max_points=150,
-                    ds_max=0.3, max_evaluations=1000, progress=None, **integrator_kw):
+                    ds_max=0.3, max_evaluations=500, progress=None, **integrator_kw):
     """The stability chart of ``model`` in (frequency, amplitude).
 
     p_range: (A_lo, A_hi) amplitudes (m or N, > 0); f_range: (f_lo, f_hi) Hz. A frequency
@@ -107,9 +107,11 @@ def stability_chart(model, p_range, f_range, orders=(1, 2, 3), *, amplitude=None
     one given as ``diagram``, supplies the starts: every located bifurcation of a kind in
     ``kinds`` on a branch of an order in ``orders`` that no curve traced so far passes through
     (continuation.bifurcation_curve, each followed both ways until it leaves the ranges, at
-    most ``max_points`` points per direction and ``max_evaluations`` shooting evaluations per
-    curve: a curve that reaches either is kept as far as it got, and listed in the warning). A fold or period doubling located at a grazing
-    point (non-smooth) is represented by the grazing curve there. label_grid: (n_f, n_A) grid
+    most ``max_points`` points and ``max_evaluations`` shooting evaluations per curve and
+    direction: a curve that reaches either is kept as far as it got, and listed in the
+    warning; bifurcation_curve with max_evaluations=None extends it). A fold or period
+    doubling located at a grazing point (non-smooth) is represented by the grazing curve
+    there. label_grid: (n_f, n_A) grid
     points (log-spaced) where the attractor reached from rest is classified by its order
     (attractor_order); (0, 0) for none. progress: callable(str) or None. Returns a
     StabilityChart; one ContinuationWarning lists the starts that could not be traced.

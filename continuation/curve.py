@@ -474,14 +474,16 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     extended system (continuation.extended) in scaled unknowns: ds, ds_min, ds_max (step),
     max_angle (rad between tangents), max_points (per direction), tol (scaled residual),
     max_iter (corrector), max_evaluations (shooting evaluations per direction, None: no
-    limit; a trace that reaches it ends 'max_evaluations'). element, phase: for a grazing curve, the stop (element index) and
-    excitation phase (periods) of the grazing contact (default: the local maximum of the
-    penetration closest to zero on the start orbit). Integrator options as for
-    periodic_solution (the diagram's integrator, for the curve to pass through its points).
-    error: estimate the integration error of the frequency at the start and the ``at``
-    points (BifurcationCurve.error). Codimension-2 points met (Codim2: cusp, fold-flip, a curve meeting a grazing curve) are in
-    ``special``. Returns a BifurcationCurve; a ContinuationWarning says where a trace stopped
-    short of the ranges (step underflow or max_points).
+    limit; a trace that reaches it ends 'max_evaluations'). element, phase: for a grazing
+    curve, the stop (element index) and excitation phase (periods) of the grazing contact
+    (default: the local maximum of the penetration closest to zero on the start orbit).
+    Integrator options as for periodic_solution (the diagram's integrator, for the curve to
+    pass through its points). error: estimate the integration error of the frequency at the
+    start and the ``at`` points (BifurcationCurve.error). Codimension-2 points met (Codim2:
+    cusp, fold-flip, a curve meeting a grazing curve, i.e. the number of impacts per period
+    changes along it) are in ``special``. Returns a BifurcationCurve; a ContinuationWarning
+    says where a trace stopped short of the ranges (step underflow, max_points,
+    max_evaluations); a start that does not converge raises ConvergenceError.
     """
     t_wall = time.perf_counter()
     integrator = integrator or Integrator(**integrator_kw)
