@@ -99,7 +99,7 @@ def _duplicate(curves, bf, amplitude, rel=1e-4):
 def stability_chart(model, p_range, f_range, orders=(1, 2, 3), *, amplitude=None,
                     kinds=("fold", "period-doubling", "neimark-sacker", "grazing"),
                     diagram=None, label_grid=(16, 6), integrator=None, max_points=150,
-                    ds_max=0.3, max_evaluations=500, progress=None, **integrator_kw):
+                    ds_max=0.3, max_evaluations=1000, progress=None, **integrator_kw):
     """The stability chart of ``model`` in (frequency, amplitude).
 
     p_range: (A_lo, A_hi) amplitudes (m or N, > 0); f_range: (f_lo, f_hi) Hz. A frequency
