@@ -8,9 +8,9 @@ Neimark-Sacker or grazing point in (frequency, amplitude or a model parameter), 
 codimension-2 points met) and ``stability_chart`` (all curves of a diagram, and the attractor
 orders on a grid), saved and read by ``load_curves``. Every periodic solution, branch point
 and bifurcation carries an error estimate from a solve with the step halved
-(``continuation.accuracy``; ``accuracy=`` asks for more digits). The figures (``continuation.plot``) and the HDF5 files (``save``,
-``load``) live on the application floor, nlbeam.app; importing this package loads neither
-matplotlib nor h5py.
+(``continuation.accuracy``; ``accuracy=`` asks for more digits). The figures
+(``continuation.plot``) and the HDF5 files (``save``, ``load``, ``load_curves``) live on the
+application floor, nlbeam.app; importing this package loads neither matplotlib nor h5py.
 Units: Hz, m (N for force excitation), s.
 """
 from ._newton import ContinuationWarning, ConvergenceError
