@@ -213,3 +213,14 @@ def test_front_door_checks_its_input(kw, match):
         C.bifurcation_curve(m, bif, p_range, **args)
     with pytest.raises(ValueError, match="kind must be one of"):
         C.bifurcation_curve(m, dict(bif, kind="pitchfork"), (1e-2, 2.0), amplitude=0.3)
+
+
+def test_a_bifurcation_at_a_grazing_point_is_refused_with_the_way_out():
+    bif = C.Bifurcation("period-doubling", 6.6484, 6.6484, 1e-4, 1, 0, 1e-9, None,
+                        state0=np.zeros(2), note="at grazing: multiplier jumps from -3.4 to "
+                        "-0.001 (non-smooth)")
+    with pytest.raises(ValueError, match="trace the grazing curve instead"):
+        C.bifurcation_curve(nlbeam.BeamImpact(), bif, (5e-5, 2e-4), amplitude=1e-4)
+    with pytest.raises(ValueError, match="bifurcation: needs frequency, order and state0"):
+        C.bifurcation_curve(nlbeam.BeamImpact(), {"kind": "fold", "frequency": 58.0,
+                                                  "order": 1}, (5e-5, 2e-4), amplitude=1e-4)
