@@ -36,7 +36,7 @@ def compute(job_inputs):
     if queue is not None:
         label = job_inputs.get("_label", "")
         job_inputs = dict(job_inputs)
-        if job_inputs["analysis"] == "periodic":
+        if job_inputs["analysis"] in ("periodic", "chart"):  # lines of text
             job_inputs["_progress"] = lambda msg: queue.put((label, str(msg)))
         else:
             job_inputs["_progress"] = lambda done, total: queue.put((label, (done, total)))
