@@ -44,6 +44,10 @@ UPWARD = (
      "FrequencyResponse.save and continuation.load delegate to the HDF5 file floor"),
     ("stochastic.simulate", "nlbeam.app.files.stochastic_hdf5", "function",
      "StochasticResult.save and stochastic.load delegate to the HDF5 file floor"),
+    ("continuation.curve", "nlbeam.app.files.curves_hdf5", "function",
+     "BifurcationCurve.save and continuation.load_curves delegate to the HDF5 file floor"),
+    ("continuation.chart", "nlbeam.app.files.curves_hdf5", "function",
+     "StabilityChart.save delegates to the HDF5 file floor"),
 )
 
 

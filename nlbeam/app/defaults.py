@@ -20,8 +20,8 @@ import stochastic
 
 from .compare import map_peaks
 
-__all__ = ["signature_defaults", "HELP", "DERIVED", "PERIODIC", "STOCHASTIC", "MODEL",
-           "CHANNEL", "MIN_PROMINENCE", "HISTORY_SECONDS", "HISTORY_CHANNELS",
+__all__ = ["signature_defaults", "HELP", "DERIVED", "PERIODIC", "STOCHASTIC", "CHART",
+           "MODEL", "CHANNEL", "MIN_PROMINENCE", "HISTORY_SECONDS", "HISTORY_CHANNELS",
            "SIMULATE_CHANNELS", "DEMO_WORKERS", "DEMO_DURATION"]
 
 
@@ -97,6 +97,13 @@ DERIVED = {"steps_per_contact": "the solver's", "accuracy": "'default'",
            "lowpass": "none", "transient": "10 decay times of the slowest mode "
            "(stochastic.simulate)", "psd_resolution": "max(0.05, 16 / duration) "
            "(stochastic.simulate)", "dt": "1 / (32 f_max of the noise)"}
+_CHART = signature_defaults(continuation.stability_chart)
+#: [chart] of a scene: the paper's study (amplitudes 0.02-0.5 mm, 5-150 Hz), the rest as
+#: continuation.stability_chart (amplitude None: the geometric mean of p_range)
+CHART = {"p_range": [2e-5, 5e-4], "f_range": [5.0, 150.0],
+         "orders": list(_CHART["orders"]), "amplitude": _CHART["amplitude"],
+         "label_grid": list(_CHART["label_grid"]), "max_points": _CHART["max_points"],
+         "max_evaluations": _CHART["max_evaluations"]}
 #: the paper's model (nlbeam.BeamImpact's defaults: m, k, b, K_hertz, e, contact, mu, clamp)
 MODEL = signature_defaults(nlbeam.BeamImpact)
 #: the channel of a figure, table or comparison that names none

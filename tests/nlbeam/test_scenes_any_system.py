@@ -264,6 +264,7 @@ def test_every_key_of_every_section_is_documented():
                 "[stochastic]": schema.STOCHASTIC_KEYS, "[[figure]]": schema.FIGURE_KEYS,
                 "[[table]]": schema.TABLE_KEYS, "[sweep]": schema.SWEEP_KEYS,
                 "[model.args]": {}, "[measured]": schema.MEASURED_KEYS,
+                "[chart]": schema.CHART_KEYS,
                 "(top level)": {"title": None}}
     for t, keys in models.ELEMENT_KEYS.items():
         sections.setdefault("[[model.elements]]", {}).update(keys)

@@ -30,9 +30,12 @@ __all__ = ["ResultFileError", "LegacyResultWarning", "NewerWriterWarning", "FORM
 
 # format name -> (current version, what the user calls to load it)
 FORMATS = {"nlbeam.frequency_response": (2, "continuation.load"),
-           "nlbeam.stochastic.result": (2, "stochastic.load")}
+           "nlbeam.stochastic.result": (2, "stochastic.load"),
+           # first written stamped: version 2 (version 1 means unstamped, legacy)
+           "nlbeam.bifurcation_curves": (2, "continuation.load_curves")}
 _KIND = {"nlbeam.frequency_response": "a frequency-response result",
-         "nlbeam.stochastic.result": "a stochastic result"}
+         "nlbeam.stochastic.result": "a stochastic result",
+         "nlbeam.bifurcation_curves": "a bifurcation-curve result"}
 _STAMP = ("format", "written_by", "checksums")  # attributes the checksum does not cover
 _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 

@@ -8,8 +8,8 @@ import os
 
 from nlbeam.vocabulary import CHANNELS
 
-__all__ = ["_real", "_int", "_choice", "_bool", "_str", "_pair", "_int_list", "_channels",
-           "_file", "_matrix", "_vector", "_dof", "_accuracy"]
+__all__ = ["_real", "_int", "_choice", "_bool", "_str", "_pair", "_pair_int", "_int_list",
+           "_channels", "_file", "_matrix", "_vector", "_dof", "_accuracy"]
 
 
 # -- value checks --------------------------------------------------------------------------------
@@ -64,6 +64,15 @@ def _pair(lo=0.0, strict_lo=False, unit="Hz"):
                 or not b > a:
             return None, f"must satisfy {lo:g} {'<' if strict_lo else '<='} lo < hi ({unit})"
         return [a, b], None
+    return check
+
+
+def _pair_int(lo, hi):
+    def check(v):
+        if not isinstance(v, list) or len(v) != 2 or any(
+                isinstance(x, bool) or not isinstance(x, int) or not lo <= x <= hi for x in v):
+            return None, f"must be a pair [a, b] of integers in [{lo}, {hi}]"
+        return [int(v[0]), int(v[1])], None
     return check
 
 

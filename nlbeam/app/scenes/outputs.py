@@ -13,8 +13,9 @@ from ..compare import map_peaks
 from ..files import write_text_atomic
 from ..plots.scene import scene_figure
 from .bifurcation_list import bifurcation_rows
+from .chart_outputs import chart_figure, chart_table, chart_variants
 from .numbers import with_error
-from .schema import build_model, default_f_max, excitation_for_peaks
+from .schema import CHART_OUTPUTS, build_model, default_f_max, excitation_for_peaks
 
 __all__ = ["write_outputs", "write_table", "distinct"]
 
@@ -95,9 +96,15 @@ def write_outputs(scene, jobs, results, out_dir, log):
         values = dict(zip((v[0] for v in variants), scene.sweep["values"]))
         swept = (*scene.swept, values)
     for d in scene.figures:
+        if d["kind"] in CHART_OUTPUTS:
+            files += chart_figure(scene.title, d, chart_variants(scene, jobs, results), out_dir)
+            continue
         files += scene_figure(scene.title, d, distinct(d["kind"], variants), out_dir,
                               measured=measured)
     for d in scene.tables:
+        if d["kind"] in CHART_OUTPUTS:
+            files.append(chart_table(d, chart_variants(scene, jobs, results), out_dir))
+            continue
         files.append(write_table(d, variants, out_dir, measured=measured, swept=swept))
     for f in files:
         log(f"nlbeam: wrote {f}")

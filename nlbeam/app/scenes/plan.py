@@ -2,7 +2,8 @@
 analysis and sweep value, each keyed by exactly its inputs and marked cached or not) and the
 plan as text (``format_plan``).
 
-What each output needs: ``frc`` and table ``bifurcations`` the diagram; ``psd`` the PSD of
+What each output needs: ``frc`` and table ``bifurcations`` the diagram; ``stability_chart``
+and table ``curves`` the stability chart of the [chart] section; ``psd`` the PSD of
 its channel; ``excitation_psd`` the PSD of ``y``; ``pdf`` the histogram and moments of its
 channel; ``history`` a stored time window of its channels; ``compare`` and table ``peaks``
 the diagram and the PSD. A scene without them runs neither analysis; a stochastic run keeps
@@ -26,7 +27,7 @@ from dataclasses import dataclass
 from .. import defaults
 from ..files import canonical_json, code_fingerprint, content_key
 from .models import model_inputs
-from .schema import history_channels, history_window
+from .schema import CHART_OUTPUTS, history_channels, history_window
 
 __all__ = ["CACHE_DIR", "Job", "plan", "format_plan", "check_entry", "entry_record"]
 
@@ -96,6 +97,7 @@ def needs(scene):
 def plan(scene, out_dir):
     """The jobs the scene's outputs need, each marked cached or not. Returns a list of Job."""
     need_p, need_stab, chans, hist, hist_ch = needs(scene)
+    need_chart = any(d["kind"] in CHART_OUTPUTS for d in scene.figures + scene.tables)
     stability = bool(need_stab)  # what is computed is what is keyed
     cache = os.path.join(os.fspath(out_dir), CACHE_DIR)
     jobs = []
@@ -109,6 +111,13 @@ def plan(scene, out_dir):
                              f"frequency response {p['f_range'][0]:g}-{p['f_range'][1]:g} Hz, "
                              f"A = {p['amplitude']:g} m, orders {p['orders']}"
                              f"{'' if stability else ', no stability'}"))
+        if need_chart:
+            c = scene.chart
+            inputs = {"analysis": "chart", "model": m, "chart": c, "code": code_fingerprint()}
+            jobs.append(_job("chart", label, inputs, cache,
+                             f"stability chart {c['f_range'][0]:g}-{c['f_range'][1]:g} Hz, "
+                             f"A = {c['p_range'][0]:g}-{c['p_range'][1]:g} m, orders "
+                             f"{c['orders']}"))
         if chans or hist is not None:
             channels = sorted(set(chans) | set(hist_ch))
             outputs = sorted(set().union(*chans.values())) if chans else []
@@ -158,8 +167,8 @@ def check_entry(path, inputs, kind):
     try:
         if _sha256_file(path) != sha:
             return "its bytes differ from the recorded checksum (changed or swapped)"
-        name = "nlbeam.frequency_response" if kind == "periodic" else \
-            "nlbeam.stochastic.result"
+        name = {"periodic": "nlbeam.frequency_response", "chart": "nlbeam.bifurcation_curves"
+                }.get(kind, "nlbeam.stochastic.result")
         with read_result(path, name):
             pass
     except (OSError, ResultFileError) as err:

@@ -36,7 +36,7 @@ def compute(job_inputs):
     if queue is not None:
         label = job_inputs.get("_label", "")
         job_inputs = dict(job_inputs)
-        if job_inputs["analysis"] == "periodic":
+        if job_inputs["analysis"] in ("periodic", "chart"):  # lines of text
             job_inputs["_progress"] = lambda msg: queue.put((label, str(msg)))
         else:
             job_inputs["_progress"] = lambda done, total: queue.put((label, (done, total)))
@@ -50,6 +50,13 @@ def compute(job_inputs):
             kw["progress"] = job_inputs["_progress"]
         return continuation.frequency_response(
             model, p["amplitude"], tuple(p["f_range"]), orders=tuple(p["orders"]), **kw)
+    if kind == "chart":
+        c = job_inputs["chart"]
+        return continuation.stability_chart(
+            model, tuple(c["p_range"]), tuple(c["f_range"]), orders=tuple(c["orders"]),
+            amplitude=c["amplitude"], label_grid=tuple(c["label_grid"]),
+            max_points=c["max_points"], max_evaluations=c["max_evaluations"],
+            progress=job_inputs.get("_progress"))
     s = job_inputs["stochastic"]
     hist = job_inputs["history"]
     keep = None if hist is None else tuple(hist)  # s after the transient, as in simulate
@@ -91,6 +98,8 @@ def load_result(job):
     """The cached result of ``job`` (its HDF5 file)."""
     if job.kind == "periodic":
         return continuation.load(job.path)
+    if job.kind == "chart":
+        return continuation.load_curves(job.path)
     return stochastic.load(job.path)
 
 
@@ -234,7 +243,7 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
             if j.kind == "stochastic" and not quiet:
                 inputs["_progress"] = (lambda done, total, n=n: show.bar(
                     f"nlbeam:   [{n}/{len(todo)}] simulated", done, total, "s"))
-            elif j.kind == "periodic" and not quiet:
+            elif j.kind in ("periodic", "chart") and not quiet:
                 inputs["_progress"] = lambda msg: show(f"nlbeam:   {msg}")
             t = time.perf_counter()
             r, warned = compute_recorded(inputs)

@@ -32,11 +32,15 @@ Scene file (every section and key optional; units SI, Hz)::
     channels = ["delta", "y"] # its columns, named like the channels (SI units)
     time_column = "t"         # default "t"; label (default "measured"), band, psd_resolution,
                               # pdf_bins optional
-    [[figure]]     # kind: frc | excitation_psd | pdf | history | psd | compare
+    [chart]        # continuation.stability_chart: bifurcation curves in (f, amplitude)
+    p_range = [2e-5, 5e-4]    # m, the amplitude range of the curves
+    f_range = [5.0, 150.0]    # Hz
+    [[figure]]     # kind: frc | excitation_psd | pdf | history | psd | compare |
+                   #       stability_chart
     kind = "psd"
     file = "fig9.png"
     channel = "delta"         # x | v | y | yd | delta | force
-    [[table]]      # kind: moments | peaks | bifurcations (CSV)
+    [[table]]      # kind: moments | peaks | bifurcations | curves (CSV)
     kind = "moments"
     file = "moments.csv"
     [sweep]        # one run per value; any name of sweep_parameters
@@ -62,7 +66,7 @@ from nlbeam.vocabulary import CHANNELS, METHODS
 from .. import defaults
 from ..files import canonical_json
 from .checks import (_accuracy, _bool, _channels, _choice, _file, _int, _int_list, _pair,
-                     _real, _str)
+                     _pair_int, _real, _str)
 from ..sweeps import BAND_EDGES, PARAMETERS
 from .models import MODEL_KEYS, PARAMETER_UNITS, build_model, check_model, model_parameters
 
@@ -70,8 +74,10 @@ __all__ = ["SceneError", "Scene", "load_scene", "build_model", "build_noise", "d
            "history_window", "history_channels", "excitation_for_peaks", "FIGURE_KINDS",
            "TABLE_KINDS", "sweep_parameters", "SECTIONS", "with_settings"]
 
-FIGURE_KINDS = ("frc", "excitation_psd", "pdf", "history", "psd", "compare")
-TABLE_KINDS = ("moments", "peaks", "bifurcations")
+FIGURE_KINDS = ("frc", "excitation_psd", "pdf", "history", "psd", "compare", "stability_chart")
+TABLE_KINDS = ("moments", "peaks", "bifurcations", "curves")
+#: the outputs that read the [chart] section's stability chart
+CHART_OUTPUTS = ("stability_chart", "curves")
 
 
 class SceneError(ValueError):
@@ -119,12 +125,18 @@ TABLE_KEYS = {"kind": _choice(TABLE_KINDS), "file": _file((".csv",)),
 STABILITY_OPTIONAL = ("compare", "peaks")
 SWEEP_KEYS = {"parameter": _str, "values": None,
               "workers": _int(1, 1024)}
+CHART_KEYS = {"p_range": _pair(0.0, strict_lo=True, unit="m"),
+              "f_range": _pair(0.0, strict_lo=True), "orders": _int_list(1, 8),
+              "amplitude": _real(0, lo_open=True, unit="m"),
+              "label_grid": _pair_int(0, 200), "max_points": _int(1, 100000),
+              "max_evaluations": _int(1, 10 ** 8)}
 SECTIONS = {"model": MODEL_KEYS, "periodic": PERIODIC_KEYS, "stochastic": STOCHASTIC_KEYS,
             "sweep": SWEEP_KEYS}
 
 #: what a section leaves out (nlbeam.app.defaults: the analyses' own defaults and the paper's
 #: study); transient and psd_resolution None: stochastic.simulate derives them
 PERIODIC_DEFAULTS = defaults.PERIODIC
+CHART_DEFAULTS = defaults.CHART
 STOCHASTIC_DEFAULTS = defaults.STOCHASTIC
 
 
@@ -186,6 +198,7 @@ class Scene:
     tables: list
     sweep: dict | None
     measured: dict | None = None  # [measured] with the file's absolute path
+    chart: dict | None = None  # [chart] with defaults filled in (continuation.stability_chart)
 
     def variants(self):
         """[(label, model, periodic, stochastic)] one per sweep value (one if no sweep)."""
@@ -288,8 +301,8 @@ def load_scene(path) -> Scene:
             out[k] = val
         return out
 
-    allowed_top = ("title", "model", "periodic", "stochastic", "figure", "table", "sweep",
-                   "measured")
+    allowed_top = ("title", "model", "periodic", "stochastic", "chart", "figure", "table",
+                   "sweep", "measured")
     for k in doc:
         if k not in allowed_top:
             fail((k,), f"unknown key or section; allowed: {', '.join(allowed_top)}")
@@ -324,6 +337,13 @@ def load_scene(path) -> Scene:
                 fail(("measured",), f"missing key {req!r}")
         measured["file"] = _columns_file(path, measured["file"], ("measured", "file"),
                                          (measured["time_column"], *measured["channels"]), fail)
+    chart = None
+    if "chart" in doc:
+        chart = copy.deepcopy(CHART_DEFAULTS)
+        chart.update(section("chart", CHART_KEYS, doc["chart"], ("chart",)))
+        a = chart["amplitude"]
+        if a is not None and not chart["p_range"][0] <= a <= chart["p_range"][1]:
+            fail(("chart", "amplitude"), f"must lie in p_range {chart['p_range']} (m)", a)
     figures, tables = [], []
     for name, keys, store in (("figure", FIGURE_KEYS, figures), ("table", TABLE_KEYS, tables)):
         items = doc.get(name, [])
@@ -352,6 +372,8 @@ def load_scene(path) -> Scene:
             needs_p = d["kind"] in ("frc", "compare", "peaks", "bifurcations")
             needs_s = d["kind"] in ("excitation_psd", "pdf", "history", "psd", "compare",
                                     "moments", "peaks")
+            if d["kind"] in CHART_OUTPUTS and chart is None:
+                fail((name, i, "kind"), f"{d['kind']!r} needs a [chart] section")
             if needs_p and periodic is None:
                 fail((name, i, "kind"), f"{d['kind']!r} needs a [periodic] section")
             if needs_s and stoch is None:
@@ -389,7 +411,7 @@ def load_scene(path) -> Scene:
         sweep["values"] = clean
     scene = Scene(path=path, title=title, model=model, periodic=periodic, stochastic=stoch,
                   figures=[d for _, d in figures], tables=[d for _, d in tables], sweep=sweep,
-                  measured=measured)
+                  measured=measured, chart=chart)
     # the objects validate the values together (e.g. hunt-crossley needs mu, Nyquist)
     for label, m, p, s in scene.variants():
         try:

@@ -1,0 +1,291 @@
+"""The extended shooting system of a bifurcation in two parameters (frequency and a second one).
+
+Unknowns, scaled: z = [u / scale_u, log f, q, (phase)], u the shooting states, f the excitation
+frequency (Hz), q the second parameter (log of the amplitude, or value / |start value| for a
+model parameter), phase (grazing only) the excitation phase (periods) of the grazing contact.
+Equations: the shooting residual R(u, f, p) = 0 and
+
+- fold, period doubling, Neimark-Sacker: g = 0, with g the bordered test function of
+  A = M - I, M + I or C2(M) - I (M the monodromy, C2 its second compound matrix, whose
+  eigenvalues are the products mu_i mu_j, i < j): [[A, b], [c^T, 0]] [v; g] = [0; 1], which
+  vanishes exactly where A is singular and is regular there (a minimally augmented system;
+  b and c are renewed from A's singular vectors at every accepted curve point);
+- grazing: delta_e = 0 and d(delta_e)/dt = 0 at the grazing phase (the orbit touches stop e with
+  zero relative velocity).
+
+dR/du and dR/df come from the shooting problem (variational equations); dR/dq by a forward
+difference; the rows of g and of the grazing conditions by central differences (one monodromy,
+or one flow, per unknown). When the monodromy is the exact derivative of the discrete map,
+Newton on this system converges quadratically; it converges linearly (fast) otherwise.
+"""
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+
+import numpy as np
+
+from ._newton import ConvergenceError
+from .shooting import _problem_from_state, event_elements
+
+KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing")
+
+
+def compound2(M):
+    """The second compound matrix of M (n, n): its 2x2 minors, (n(n-1)/2, n(n-1)/2)."""
+    n = len(M)
+    pairs = list(itertools.combinations(range(n), 2))
+    C = np.empty((len(pairs), len(pairs)))
+    for a, (i, j) in enumerate(pairs):
+        for b, (k, l) in enumerate(pairs):
+            C[a, b] = M[i, k] * M[j, l] - M[i, l] * M[j, k]
+    return C
+
+
+def singular_matrix(kind, M):
+    """The matrix that is singular at a bifurcation of this kind of the orbit of monodromy M."""
+    if kind == "fold":
+        return M - np.eye(len(M))
+    if kind == "period-doubling":
+        return M + np.eye(len(M))
+    C = compound2(M)
+    return C - np.eye(len(C))
+
+
+def bordered(A, b, c):
+    """The bordered test function g of A: zero exactly where A is singular (b, c: vectors
+    not orthogonal to A's left and right null vectors there)."""
+    n = len(A)
+    K = np.zeros((n + 1, n + 1))
+    K[:n, :n] = A
+    K[:n, n] = b
+    K[n, :n] = c
+    rhs = np.zeros(n + 1)
+    rhs[n] = 1.0
+    return float(np.linalg.solve(K, rhs)[n])
+
+
+def borders(A):
+    """(b, c): the left and right singular vectors of A's smallest singular value."""
+    U, s, Vt = np.linalg.svd(A)
+    return U[:, -1].copy(), Vt[-1].copy()
+
+
+@dataclasses.dataclass
+class CurveState:
+    """What is known at one point of the extended system's solution set."""
+
+    z: np.ndarray
+    G: np.ndarray
+    J: np.ndarray  # dG/dz (D - 1, D), scaled
+    multipliers: np.ndarray | None
+    xmax: float
+    n_impacts: int
+
+
+class CurveSystem:
+    """The extended system G(z) = 0 (D - 1 equations, D unknowns) of one bifurcation kind of
+    the orbits of one order; module doc. parameter: 'amplitude' or a field of the model
+    (dataclasses.replace: 'e', 'K_hertz', 'b', ...)."""
+
+    def __init__(self, model, kind, order, amplitude, frequency, state0, parameter, integrator, *,
+                 disc0=None, segments=1, element=None, phase=None):
+        self.kind = kind
+        self.order = int(order)
+        self.parameter = parameter
+        self.model0 = model
+        self.amplitude0 = float(amplitude)
+        self.prob, u0 = _problem_from_state(model, amplitude, frequency, order, state0, segments,
+                                            integrator, disc0=disc0)
+        p0 = self.amplitude0 if parameter == "amplitude" else float(getattr(model, parameter))
+        self.log_p = parameter == "amplitude" or p0 > 0
+        self.p_scale = 1.0 if self.log_p else max(abs(p0), 1.0)
+        self._model_cache = (p0, model)
+        self.n = self.prob.n
+        self.grazing = kind == "grazing"
+        self.D = self.n + 2 + (1 if self.grazing else 0)
+        self.n_evaluations = 0
+        z = np.r_[u0 / self.prob.scale_u, math.log(frequency), self.q_of(p0)]
+        if self.grazing:
+            self.element, phase = self._grazing_start(u0, frequency, p0, element, phase)
+            z = np.r_[z, phase]
+        else:
+            M = self._monodromy(z)[0]
+            self.b, self.c = borders(singular_matrix(kind, M))
+        self.z0 = z
+
+    # --- parameters ----------------------------------------------------------------------------
+    def q_of(self, p):
+        return math.log(p) if self.log_p else p / self.p_scale
+
+    def p_of(self, q):
+        return math.exp(q) if self.log_p else q * self.p_scale
+
+    def _set(self, p):
+        """Put the second parameter's value p into the shooting problem."""
+        prob = self.prob
+        if self.parameter == "amplitude":
+            prob.amplitude = float(p)
+            return
+        key, m = self._model_cache
+        if key != p:
+            m = dataclasses.replace(self.model0, **{self.parameter: float(p)})
+            self._model_cache = (p, m)
+        prob.base_model = m
+
+    def unpack(self, z):
+        """(u, f Hz, p) of the scaled unknowns z."""
+        return z[:self.n] * self.prob.scale_u, math.exp(z[self.n]), self.p_of(z[self.n + 1])
+
+    def point(self, z):
+        """(frequency Hz, second parameter value) of z."""
+        return math.exp(z[self.n]), self.p_of(z[self.n + 1])
+
+    # --- pieces --------------------------------------------------------------------------------
+    def _evaluate(self, z, jac):
+        """The shooting evaluation at z: R, with jac dR/du and the monodromy (no dR/df)."""
+        u, f, p = self.unpack(z)
+        self._set(p)
+        self.n_evaluations += 1
+        return self.prob.evaluate(u, f, jac=jac, jac_p=False)
+
+    def _monodromy(self, z):
+        ev = self._evaluate(z, True)
+        return self.prob.monodromy(ev.Ms), ev
+
+    def _g(self, z):
+        M, _ = self._monodromy(z)
+        return bordered(singular_matrix(self.kind, M), self.b, self.c)
+
+    def _grazing_state(self, z):
+        """(delta, d delta / dt) of the grazing element at the grazing phase (m, m/s)."""
+        u, f, p = self.unpack(z)
+        self._set(p)
+        prob = self.prob
+        model, ex = prob.forcing(f)
+        U = u.reshape(prob.n_seg, prob.N2)
+        b = prob.boundaries
+        ph = b[0] + (z[-1] - b[0]) % prob.order
+        j = int(np.searchsorted(b, ph, side="right") - 1)
+        dphi = ph - b[j]
+        s = U[j] if dphi < 1e-14 else prob.flow_phases(model, ex, U[j], b[j], dphi,
+                                                        newton=True).state
+        self.n_evaluations += 1
+        _, w, wy, gap = model.element_geometry()
+        e = self.element
+        N = model.n_dof
+        y, yd = ex.evaluate(ph / f)
+        return (float(w[e] @ s[:N] + wy[e] * y[0] - gap[e]),
+                float(w[e] @ s[N:] + wy[e] * yd[0]))
+
+    def _grazing_rows(self, z):
+        u, f, p = self.unpack(z)
+        a = self.prob.scale_u[0]
+        om = 2 * np.pi * f / self.order
+        d, dd = self._grazing_state(z)
+        return np.array([d / a, dd / (a * om)])
+
+    def _grazing_start(self, u0, f, p, element, phase):
+        """(element, phase): the stop and excitation phase (periods) of the local maximum of the
+        penetration closest to zero over the orbit (given ones are checked and kept)."""
+        prob = self.prob
+        self._set(p)
+        idx = event_elements(prob.base_model)
+        if not idx:
+            raise ValueError("kind: 'grazing' needs a model with a contact element (a stop)")
+        if element is not None and element not in idx:
+            raise ValueError(f"element: must be one of the stops {idx}, got {element!r}")
+        tr = prob.trajectory(u0, f)
+        model, ex = prob.forcing(f)
+        _, w, wy, gap = model.element_geometry()
+        y = ex.evaluate(tr.t)[0]
+        best = (np.inf, None, None)
+        for e in ([element] if element is not None else idx):
+            d = tr.x @ w[e] + wy[e] * y - gap[e]
+            dc = d[:-1]  # one period, periodic
+            k = np.nonzero((dc >= np.roll(dc, 1)) & (dc > np.roll(dc, -1)))[0]
+            for i in k:
+                if abs(dc[i]) < best[0]:
+                    best = (abs(dc[i]), e, tr.t[i] * f)
+        if best[1] is None:
+            raise ConvergenceError("grazing: the orbit has no local maximum of the penetration; "
+                                   "give phase= (excitation periods) of the grazing contact")
+        e = best[1]
+        ph = best[2] if phase is None else float(phase)
+        return e, ph
+
+    # --- the system ----------------------------------------------------------------------------
+    def evaluate(self, z, jac=True):
+        """A CurveState at z: G (D - 1,) and (with jac) its Jacobian (D - 1, D), scaled.
+        dR/du from the variational equations; every other column by forward differences
+        (step 1e-6 in the scaled unknowns): one evaluation with the monodromy per unknown
+        gives the test function's row and, for frequency and parameter, dR/df and dR/dq
+        (grazing: one flow to the grazing phase per unknown, and two shooting evaluations)."""
+        n, D = self.n, self.D
+        w = self.prob.scale_u
+        ev = self._evaluate_full(z)
+        mu = self.prob.multipliers(ev.Ms) if ev.Ms else None
+        if self.grazing:
+            extra = self._grazing_rows(z)
+        else:
+            M = self.prob.monodromy(ev.Ms)
+            extra = np.array([bordered(singular_matrix(self.kind, M), self.b, self.c)])
+        G = np.r_[ev.R / w, extra]
+        if not jac:
+            return CurveState(z.copy(), G, None, mu, float(ev.xmax), int(ev.n_impacts))
+        J = np.zeros((D - 1, D))
+        J[:n, :n] = ev.Ju * w[None, :] / w[:, None]
+        h = 1e-6
+        for i in range(D):
+            zp = z.copy()
+            zp[i] += h
+            if self.grazing:
+                J[n:, i] = (self._grazing_rows(zp) - extra) / h
+                if i in (n, n + 1):
+                    J[:n, i] = (self._evaluate(zp, False).R - ev.R) / (h * w)
+                continue
+            Mp, evp = self._monodromy(zp)
+            J[n, i] = (bordered(singular_matrix(self.kind, Mp), self.b, self.c) - extra[0]) / h
+            if i in (n, n + 1):
+                J[:n, i] = (evp.R - ev.R) / (h * w)
+        return CurveState(z.copy(), G, J, mu, float(ev.xmax), int(ev.n_impacts))
+
+    def _evaluate_full(self, z):
+        """The shooting evaluation at z with the monodromy (dR/du)."""
+        return self._evaluate(z, True)
+
+    def snapshot(self):
+        """What restore() needs to put the system back (the problem may be renewed by adapt)."""
+        return (self.prob, self.n, self.D, getattr(self, "b", None), getattr(self, "c", None),
+                self.z0)
+
+    def restore(self, snap):
+        self.prob, self.n, self.D, self.b, self.c, self.z0 = snap
+
+    def renew_borders(self, z):
+        """New bordering vectors at z (keeps the bordered matrix well conditioned)."""
+        if not self.grazing:
+            M = self._monodromy(z)[0]
+            self.b, self.c = borders(singular_matrix(self.kind, M))
+
+    def adapt(self, z):
+        """None, or z in a renewed shooting problem (boundaries moved out of contact, step
+        level changed, scales renewed) when the orbit at z asks for it."""
+        u, f, p = self.unpack(z)
+        self._set(p)
+        new = self.prob.adapt(u, f)
+        if new is None:
+            return None
+        tail = z[self.n:]
+        self.prob, u2 = new
+        self.n = self.prob.n
+        z2 = np.r_[u2 / self.prob.scale_u, tail]
+        self.D = len(z2)
+        self.renew_borders(z2)
+        return z2
+
+    def state_at_zero(self, z):
+        u, f, p = self.unpack(z)
+        self._set(p)
+        return self.prob.state_at_zero(u, f)
