@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _kernels as _k
-from ._validate import choice, positive
+from ._validate import choice, flag, in_range, positive
 from .vocabulary import METHODS as METHOD_NAMES
 
 METHODS = {"rk2": _k.RK2, "rk4": _k.RK4, "adaptive": _k.DP5}  # name -> kernel code
@@ -45,6 +45,9 @@ if tuple(METHODS) != METHOD_NAMES:
 STEPS_PER_PERIOD = {"rk2": 400, "rk4": 100, "adaptive": 32}
 STEPS_PER_CONTACT = {"rk2": 96, "rk4": 32, "adaptive": 32}
 MIN_STEPS_PER_CONTACT = 8
+# the largest steps_per_contact accepted: beyond it one contact alone costs ~1e5 steps, and a
+# run with thousands of impacts would run for hours before reaching max_steps
+MAX_STEPS_PER_CONTACT = 100_000
 # |omega dt| of the highest undamped mode beyond which the explicit step amplifies it: RK4
 # 2 sqrt 2 (imaginary axis); Heun grows an undamped mode by ~(omega dt)^4 / 8 per step at any
 # dt, its real-axis limit 2 is taken. The defaults stay far below (omega dt = 2 pi / steps per
@@ -102,10 +105,11 @@ class Solver:
         if self.dt is not None:
             positive("dt", self.dt, unit="s")
         if self.steps_per_contact is not None:
-            positive("steps_per_contact", self.steps_per_contact)
-        if self.method == "adaptive":
-            positive("rtol", self.rtol)
-            positive("atol", self.atol)
+            in_range("steps_per_contact", self.steps_per_contact, 1, MAX_STEPS_PER_CONTACT)
+        positive("rtol", self.rtol)
+        positive("atol", self.atol)
+        flag("events", self.events)
+        flag("graded", self.graded)
 
     # --- the method --------------------------------------------------------------------------
     @property
