@@ -213,6 +213,9 @@ def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders
     a grazing point (``Bifurcation.smooth`` False), keep their values and errors and get
     ``refined = None``; ``refine_status`` says which ('refined' or 'failed: <reason>'; both
     saved with the diagram). Returns the list of (bifurcation, Refined or the error)."""
+    from ._arguments import check_refine
+
+    check_refine(frc, model, kinds, orders, levels, segments, tol, target_digits, max_levels)
     if frc.parameter != "frequency":
         raise ValueError("frc: refine_bifurcations needs a frequency diagram")
     out = []

@@ -292,3 +292,54 @@ def check_count(what, count, limit, knob):
     if not count <= limit:
         raise BudgetError(f"{what}: about {count:.3g}, more than the limit {limit:.3g}; {knob}")
     return count
+
+
+# --- output paths --------------------------------------------------------------------------------
+def path_like(name, value):
+    """A file path: a str or os.PathLike (not empty). Returns it as a str."""
+    if not isinstance(value, (str, os.PathLike)):
+        raise ArgumentTypeError(f"{name}: must be a path (str or os.PathLike), got "
+                                f"{type(value).__name__} {value!r}")
+    p = os.fspath(value)
+    if not isinstance(p, str) or not p:
+        raise ValueError(f"{name}: must be a non-empty path, got {value!r}")
+    return p
+
+
+def writable_folder(name, folder, create=False):
+    """A folder files can be written into (created when ``create`` and missing)."""
+    folder = path_like(name, folder)
+    if create and not os.path.exists(folder):
+        try:
+            os.makedirs(folder, exist_ok=True)
+        except OSError as exc:
+            raise ValueError(f"{name}: cannot create the folder {folder!r} "
+                             f"({exc.strerror or exc})") from None
+    if not os.path.isdir(folder):
+        what = "does not exist" if not os.path.exists(folder) else "is not a folder"
+        raise ValueError(f"{name}: the folder {folder!r} {what}")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ValueError(f"{name}: the folder {folder!r} is not writable")
+    return folder
+
+
+def output_file(name, path):
+    """A file path that can be written: not a folder, not a read-only file, in a writable
+    folder (or under a writable folder where the missing ones will be created). Checked before any work starts. Returns it as a str."""
+    p = path_like(name, path)
+    if p.endswith(os.sep) or os.path.isdir(p):
+        raise ValueError(f"{name}: {p!r} is a folder; give a file name (e.g. "
+                         f"{os.path.join(p, 'result.h5')!r})")
+    folder = os.path.dirname(os.path.abspath(p))
+    while not os.path.exists(folder):  # a missing folder is created by the save: its parent
+        parent = os.path.dirname(folder)
+        if parent == folder:
+            break
+        folder = parent
+    if not os.path.isdir(folder):
+        raise ValueError(f"{name}: {folder!r} in the path {p!r} is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ValueError(f"{name}: the folder {folder!r} is not writable (for {p!r})")
+    if os.path.exists(p) and not os.access(p, os.W_OK):
+        raise ValueError(f"{name}: the file {p!r} exists and is not writable")
+    return p

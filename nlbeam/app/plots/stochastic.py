@@ -23,6 +23,10 @@ __all__ = ["excitation_psd", "response_psd", "pdf", "time_history", "channel_psd
 def _figure(ax, figsize=(6.4, 4.0)):
     import matplotlib.pyplot as plt
 
+    from .files import check_plot_options
+
+    check_plot_options(ax=ax)
+
     if ax is None:
         fig, ax = plt.subplots(figsize=figsize, layout="constrained")
         return fig, ax, True
@@ -56,9 +60,9 @@ def default_f_max(result):
 def _f_max(result, f_max):
     if f_max is None:
         return default_f_max(result)
-    if not (isinstance(f_max, (int, float)) and np.isfinite(f_max) and f_max > 0):
-        raise ValueError(f"f_max: must be a frequency > 0 Hz, got {f_max!r}")
-    return float(f_max)
+    from nlbeam._validate import positive
+
+    return positive("f_max", f_max, unit="Hz")
 
 
 def excitation_psd(result, excitation=None, *, ch="y", ax=None, path=None, log=False,
