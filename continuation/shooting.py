@@ -331,8 +331,11 @@ class ShootingProblem(Problem):
         return M
 
     def multipliers(self, Ms):
-        mu = np.linalg.eigvals(self.monodromy(Ms))
-        return mu[np.argsort(-np.abs(mu), kind="stable")]
+        """Floquet multipliers, largest modulus first; in product form over the segments
+        when their spread would cost the small ones their digits (continuation._floquet)."""
+        from ._floquet import multipliers
+
+        return multipliers(Ms, self.monodromy(Ms))
 
     def boundary_clearance(self, u, p):
         model, ex = self.forcing(p)

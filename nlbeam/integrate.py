@@ -12,7 +12,8 @@ from . import _kernels as _k
 from ._validate import (ArgumentTypeError, check_count, check_memory, finite, flag, integer,
                         positive, real_array)
 from .excitation import Excitation
-from .solver import METHODS, MIN_STEPS_PER_CONTACT, Solver, warn_few_contact_steps
+from .solver import (METHODS, MIN_STEPS_PER_CONTACT, Solver, warn_few_contact_steps,
+                     warn_stiffened)
 from .summary import Summary
 
 __all__ = ["integrate", "flow", "FlowMap", "Trajectory", "Flow", "IntegrationError",
@@ -274,6 +275,8 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
     (t, S, D, F, s_end, disc_end, _, _, xmax, c, fc, evl) = _run(
         model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc, events,
         False, P0, dvm0, True, store_every, graded, event_log, warn)
+    if warn:
+        warn_stiffened(model, method, dt, xmax, stacklevel=2)
     return Trajectory(t=t, x=S[:, :N], v=S[:, N:], delta=D, force=F, n_impacts=int(c[4]),
                       state_end=s_end, disc_end=disc_end, t_end=float(t_end), method=method,
                       dt=dt, steps_per_contact=spc, n_steps=int(c[1]), n_rejected=int(c[2]),
