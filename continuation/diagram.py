@@ -213,9 +213,10 @@ class FrequencyResponse(Summary):
 def load(path):
     """Read a FrequencyResponse written by ``FrequencyResponse.save`` (the format:
     nlbeam.app.files.frequency_response_hdf5)."""
+    from nlbeam._validate import path_like
     from nlbeam.app.files.frequency_response_hdf5 import load_frequency_response
 
-    return load_frequency_response(path)
+    return load_frequency_response(path_like("path", path))
 
 
 # --- building branches ---------------------------------------------------------------------------

@@ -41,7 +41,13 @@ def _is_real_type(value):
 def _num(name, value):
     """``value`` as a float when it is a real number (int, float, numpy real scalar)."""
     if not _is_real_type(value):
-        what = "a numeric string" if isinstance(value, str) else f"a {type(value).__name__}"
+        what = f"a {type(value).__name__}"
+        if isinstance(value, str):
+            try:
+                float(value)
+                what = "a numeric string"
+            except ValueError:
+                what = "a string"
         raise ArgumentTypeError(f"{name}: must be a real number, got {what} {value!r}")
     return float(value)
 
@@ -58,7 +64,8 @@ def real(name, value, unit=""):
 def finite(name, value, unit=""):
     v = _num(name, value)
     if not math.isfinite(v):
-        raise ValueError(f"{name}: must be a finite number{_unit(unit)}, got {value!r}")
+        raise ValueError(f"{name}: must be a finite number{' in ' + unit if unit else ''}, got "
+                         f"{value!r}")
     return v
 
 
