@@ -4,7 +4,6 @@ accurate. Duffing k3 = 1e6 N/m^3, F = 100 N at 0.5 Hz, 20 periods, rk4."""
 import re
 import warnings
 
-import pytest
 
 import nlbeam
 
