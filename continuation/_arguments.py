@@ -159,7 +159,6 @@ def check_same_model(frc, model, name="model"):
 
 def check_refine(frc, model, kinds, orders, levels, segments, tol, target_digits, max_levels):
     from .diagram import FrequencyResponse
-    from .shooting import Integrator
 
     if not isinstance(frc, FrequencyResponse):
         raise ArgumentTypeError(f"frc: must be a continuation.FrequencyResponse, got "
@@ -168,6 +167,23 @@ def check_refine(frc, model, kinds, orders, levels, segments, tol, target_digits
     choices("kinds", kinds, ("fold", "period-doubling"))
     if orders is not None:
         integers("orders", orders, 1, MAX_ORDER)
+    _check_levels(levels, segments, tol, target_digits, max_levels)
+
+
+def check_refine_one(model, bifurcation, levels, segments, tol, target_digits, max_levels):
+    """refine: the model, a fold or period doubling with its state, and the levels."""
+    check_model(model)
+    kind = getattr(bifurcation, "kind", None)
+    if kind not in ("fold", "period-doubling") or getattr(bifurcation, "state0", None) is None:
+        raise ArgumentTypeError(f"bifurcation: must be a fold or period-doubling "
+                                f"continuation.Bifurcation with its state0, got "
+                                f"{type(bifurcation).__name__} {kind!r}")
+    _check_levels(levels, segments, tol, target_digits, max_levels)
+
+
+def _check_levels(levels, segments, tol, target_digits, max_levels):
+    from .shooting import Integrator
+
     if isinstance(levels, (str, bytes)) or not hasattr(levels, "__iter__"):
         raise ArgumentTypeError(f"levels: must be a non-empty sequence of Integrator, got "
                                 f"{levels!r}")

@@ -38,6 +38,12 @@ def _frc():
                              parameter="frequency", p_range=(5.0, 150.0))
 
 
+def _bif():
+    return continuation.Bifurcation(kind="fold", frequency=40.0, value=40.0, xmax=1e-4,
+                                    order=1, branch=0, tolerance=1e-8, multipliers=None,
+                                    state0=np.zeros(2))
+
+
 def _sol():
     return continuation.PeriodicSolution(
         state0=np.zeros(2), disc0=None, order=1, frequency=40.0, amplitude=1e-4, period=0.025,
@@ -72,6 +78,8 @@ DOORS = {
            **k}),
     "refine_bifurcations": lambda **k: continuation.refine_bifurcations(
         **{"frc": _frc(), "model": M, **k}),
+    "refine": lambda **k: continuation.refine(
+        **{"model": M, "bifurcation": _bif(), "amplitude": 1e-4, **k}),
     "BandLimitedNoise": lambda **k: stochastic.BandLimitedNoise(
         **{"band": (0.0, 100.0), "rms": 1e-4, "seed": 1, **k}),
     "SpectralNoise": lambda **k: stochastic.SpectralNoise(
@@ -212,6 +220,9 @@ CASES = [
     ("refine_bifurcations", "levels", {"levels": ()}),
     ("refine_bifurcations", "model", {"model": nlbeam.BeamImpact(e=0.52)}),
     ("refine_bifurcations", "frc", {"frc": None}),
+    ("refine", "bifurcation", {"bifurcation": None}), ("refine", "model", {"model": "beam"}),
+    ("refine", "target_digits", {"target_digits": INF}),
+    ("refine", "levels", {"levels": [1.0]}),
     # stochastic
     ("BandLimitedNoise", "rms", {"rms": "1e-4"}), ("BandLimitedNoise", "rms", {"rms": -1.0}),
     ("BandLimitedNoise", "band", {"band": "0-100"}),
