@@ -332,7 +332,8 @@ def writable_folder(name, folder, create=False):
 
 def output_file(name, path):
     """A file path that can be written: not a folder, not a read-only file, in a writable
-    folder (or under a writable folder where the missing ones will be created). Checked before any work starts. Returns it as a str."""
+    folder (or under a writable folder where the missing ones will be created). Checked
+    before any work starts. Returns it as a str."""
     p = path_like(name, path)
     if p.endswith(os.sep) or os.path.isdir(p):
         raise ValueError(f"{name}: {p!r} is a folder; give a file name (e.g. "
