@@ -317,7 +317,7 @@ class _BlockNoise(Excitation):
         if not np.all(np.isfinite(g)) or np.any(g < 0):
             bad = f[~(np.isfinite(g) & (g >= 0))][0]
             raise ValueError(f"psd: must be finite and >= 0 on the band, got "
-                             f"{self._G(np.array([bad]))!r} at {bad!r} Hz")
+                             f"{float(self._G(np.array([bad]))[0]):.6g} at {float(bad):.9g} Hz")
         return g * self.df
 
     def _check_lines(self):

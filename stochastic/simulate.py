@@ -32,6 +32,9 @@ OUTPUTS = ("psd", "pdf", "moments")
 #: (``max_samples``): 1e8 samples are 4.3 h of a 200 Hz band at the default 6.4 kHz, tens of
 #: minutes of CPU
 MAX_SAMPLES = 100_000_000
+#: a block noise may synthesize this many table samples per allowed integration sample (its
+#: step h is finer than dt, and an FFT sample is cheap: 1e9 samples of a 200 Hz band: 3 h)
+SYNTHESIS_PER_SAMPLE = 10
 
 
 def _parse_channel(name, model):
@@ -312,7 +315,8 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     ``StochasticResult.moments``).
     progress: callable(t_done_s, t_total_s) called after every chunk, or True to print.
     max_samples: refuse a run of more integration samples (transient + duration) / dt than
-    this before it starts (default MAX_SAMPLES = 1e8).
+    this before it starts (default MAX_SAMPLES = 1e8), or a block noise that would synthesize
+    more than SYNTHESIS_PER_SAMPLE (10) times as many table samples.
     Every excitation's highest frequency must lie below the sampling Nyquist frequency
     fs/2 (checked: a harmonic input above it would show at an aliased frequency).
 
@@ -381,6 +385,12 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
                 f"= {transient + duration:.6g} s", (transient + duration) / dt, max_samples,
                 "give a larger dt (or store_every), a shorter duration or transient, a "
                 "narrower band, or raise max_samples")
+    if getattr(excitation, "n_block", None) is not None:  # a block noise: its synthesis
+        check_count(f"simulate: noise samples of h = {excitation.h:.4g} s synthesized over "
+                    f"transient + duration = {transient + duration:.6g} s",
+                    (transient + duration) / excitation.h, SYNTHESIS_PER_SAMPLE * max_samples,
+                    "give a narrower band (h follows its upper edge), a shorter duration or "
+                    "transient, or raise max_samples")
     t0 = float(excitation.time_span()[0]) if math.isfinite(excitation.time_span()[0]) else 0.0
     n_tr = int(round(transient / (dt * store_every))) * store_every  # steps, on the sample grid
     n_keep = int(round(duration / (dt * store_every))) * store_every
