@@ -20,6 +20,7 @@ import stochastic
 from continuation.diagram import FrequencyResponse
 from nlbeam._validate import ArgumentTypeError, BudgetError
 from nlbeam.app.compare import map_peaks
+from nlbeam.app.plots import stochastic as stochastic_plots
 from nlbeam.app.plots.frequency_response import plot_frequency_response
 
 CASE_SECONDS = 60  # generous: a case that reaches an integration loop would run much longer
@@ -36,6 +37,11 @@ PSD = (F, 1e-9 / (1.0 + ((F - 40.0) / 2.0) ** 2) + 1e-12)
 def _frc():
     return FrequencyResponse(model_parameters=M.parameters(), amplitude=1e-4,
                              parameter="frequency", p_range=(5.0, 150.0))
+
+
+def _res():
+    t = np.arange(4000) * 1e-3
+    return stochastic.analyze(t, {"x": np.sin(2 * np.pi * 40.0 * t)}, psd_resolution=2.0)
 
 
 def _bif():
@@ -94,6 +100,9 @@ DOORS = {
     "map_peaks": lambda **k: map_peaks(**{"psd": PSD, "frc": _frc(), **k}),
     "plot_frequency_response": lambda **k: plot_frequency_response(
         **{"frc": _frc(), **k}),
+    "response_psd": lambda **k: stochastic_plots.response_psd(
+        **{"result": _res(), "ch": "x", **k}),
+    "pdf": lambda **k: stochastic_plots.pdf(**{"result": _res(), "ch": "x", **k}),
     "continuation.load": lambda **k: continuation.load(**k),
     "stochastic.load": lambda **k: stochastic.load(**k),
 }
@@ -267,6 +276,8 @@ CASES = [
     ("plot_frequency_response", "scale", {"scale": "1e3"}),
     ("plot_frequency_response", "grazing", {"grazing": "no"}),
     ("plot_frequency_response", "path", {"path": ROOT}),
+    ("response_psd", "path", {"path": ROOT}), ("response_psd", "f_max", {"f_max": -1.0}),
+    ("response_psd", "ax", {"ax": "a"}), ("pdf", "log", {"log": "yes"}),
     ("continuation.load", "path", {"path": 5}),
     ("stochastic.load", "path", {"path": None}),
 ]
