@@ -273,6 +273,8 @@ CASES = [
     ("map_peaks", "psd", {"psd": (F[::-1], PSD[1])}),
     ("map_peaks", "psd", {"psd": {"f": F}}),
     ("map_peaks", "f_range", {"f_range": (10.0,)}),
+    ("map_peaks", "frc", {"frc": None}), ("map_peaks", "tolerance", {"tolerance": 0.0}),
+    ("map_peaks", "max_multiple", {"max_multiple": 1.5}),
     ("plot_frequency_response", "scale", {"scale": "1e3"}),
     ("plot_frequency_response", "grazing", {"grazing": "no"}),
     ("plot_frequency_response", "path", {"path": ROOT}),
