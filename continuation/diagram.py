@@ -928,7 +928,7 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
                                       f"{type(solution).__name__}")
     _args.check_model(model)
     check_parameter(model, parameter, extra=("frequency", "amplitude"))
-    _args.check_p_range(parameter, model, p_range)
+    _args.check_p_range(parameter, model, p_range, solution)
     _args.integer("segments", segments, 1, _args.MAX_SEGMENTS)
     _args.check_trace(ds, ds_max, max_angle, max_points, tol, bif_tol)
     _args.check_accuracy(accuracy)

@@ -221,6 +221,8 @@ CASES = [
     ("continue_parameter", "p_range", {"p_range": (50.0, 30.0)}),
     ("continue_parameter", "parameter", {"parameter": "frequncy"}),
     ("continue_parameter", "solution", {"solution": None}),
+    ("continue_parameter", "p_range", {"p_range": (50.0, 60.0)}),
+    ("continue_parameter", "p_range", {"parameter": "e", "p_range": (0.6, 0.9)}),
     ("continue_parameter", "ds", {"ds": NAN}),
     ("refine_bifurcations", "kinds", {"kinds": ("flod",)}),
     ("refine_bifurcations", "kinds", {"kinds": "fold"}),
