@@ -31,6 +31,9 @@ class BudgetError(ValueError):
 
 # --- numbers -------------------------------------------------------------------------------------
 def _is_real_type(value):
+    t = type(value)
+    if t is float or t is int:  # the common case, fast
+        return True
     if isinstance(value, (bool, np.bool_)):
         return False
     if isinstance(value, (numbers.Real, np.integer, np.floating)):
@@ -243,6 +246,8 @@ def _short(value, n=60):
 # --- resource guards -----------------------------------------------------------------------------
 #: environment variable: the memory budget in bytes (default: half the available memory)
 MEMORY_ENV = "NLBEAM_MEMORY_BUDGET"
+#: bytes every machine this runs on can allocate: not checked against the available memory
+_ALWAYS_AFFORDABLE = 64 * 2 ** 20
 
 
 def _available_memory():
@@ -285,6 +290,8 @@ def format_bytes(n):
 def check_memory(what, nbytes, knob):
     """Raise BudgetError when ``nbytes`` (an estimate) exceeds the memory budget; what: what
     would be allocated, knob: the arguments that change it."""
+    if nbytes <= _ALWAYS_AFFORDABLE and MEMORY_ENV not in os.environ:
+        return nbytes  # no need to read /proc/meminfo (tens of microseconds) for a small one
     budget = memory_budget()
     if not nbytes <= budget:
         raise BudgetError(f"{what}: needs about {format_bytes(nbytes)}, more than the memory "

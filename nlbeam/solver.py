@@ -58,6 +58,7 @@ STABILITY = {"rk2": 2.0, "rk4": 2.0 * math.sqrt(2.0)}
 ADAPTIVE_SAMPLES_PER_PERIOD = 200
 VMINUS_FLOOR = _k.VMINUS_FLOOR  # m/s: delta'_minus of a start or onset at zero rate
 _F_MAX = weakref.WeakKeyDictionary()  # System -> highest natural frequency (Hz)
+_CUBIC = weakref.WeakKeyDictionary()  # System -> [(k3, w)] of its hardening cubic springs
 
 
 def highest_natural_frequency(model):
@@ -240,16 +241,19 @@ def stiffened_frequency(model, xmax):
     """Highest natural frequency (Hz) of the structure linearized about the largest excursion
     ``xmax`` (N,) (m) of a run: each hardening cubic spring (k3 > 0, displacement d = w . x)
     adds its tangent stiffness 3 k3 d^2 w w^T at |d| = |w| . xmax. None without such a spring."""
-    etype, w, _, _ = model.element_geometry()
-    k3 = model.kernel_arrays().epar[:, 0]
-    cubic = [e for e in range(len(etype)) if etype[e] == _k.CUBIC and k3[e] > 0]
+    sysm = model.system
+    cubic = _CUBIC.get(sysm)
+    if cubic is None:
+        etype, w, _, _ = sysm.element_geometry()
+        k3 = sysm.kernel_arrays().epar[:, 0]
+        cubic = _CUBIC[sysm] = [(float(k3[e]), w[e].copy()) for e in range(len(etype))
+                                if etype[e] == _k.CUBIC and k3[e] > 0]
     if not cubic:
         return None
-    sysm = model.system
     K = np.array(sysm.K, dtype=float)
-    for e in cubic:
-        d = float(np.abs(w[e]) @ np.abs(xmax))
-        K += 3.0 * k3[e] * d * d * np.outer(w[e], w[e])
+    for k3, w in cubic:
+        d = float(np.abs(w) @ np.abs(xmax))
+        K += 3.0 * k3 * d * d * np.outer(w, w)
     lam = np.linalg.eigvals(np.linalg.solve(sysm.M, K))
     return float(np.sqrt(np.abs(lam.real)).max() / (2 * np.pi))
 
