@@ -923,11 +923,11 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
     accuracy: as for frequency_response (errors in the units of the parameter)."""
     _args.check_integrator("continue_parameter", integrator, integrator_kw,
                            inspect.signature(continue_parameter).parameters)
+    _args.check_model(model)
+    check_parameter(model, parameter, extra=("frequency", "amplitude"))
     if not isinstance(solution, PeriodicSolution):
         raise _args.ArgumentTypeError(f"solution: must be a continuation.PeriodicSolution, got "
                                       f"{type(solution).__name__}")
-    _args.check_model(model)
-    check_parameter(model, parameter, extra=("frequency", "amplitude"))
     _args.check_p_range(parameter, model, p_range, solution)
     _args.integer("segments", segments, 1, _args.MAX_SEGMENTS)
     _args.check_trace(ds, ds_max, max_angle, max_points, tol, bif_tol)
