@@ -1,6 +1,7 @@
 """Frequency-response diagrams: branches of every order, their bifurcations, save and load."""
 from __future__ import annotations
 
+import inspect
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -12,11 +13,12 @@ from nlbeam.parameters import check_parameter
 from nlbeam.solver import period_step
 from nlbeam.summary import Summary, describe_value
 
+from . import _arguments as _args
 from ._newton import ContinuationWarning, ConvergenceError
 from .pathfollow import Tracer
 from .seeding import brute_force
-from .shooting import (Integrator, ShootingProblem, _problem_from_state, forcing,
-                       steady_state)
+from .shooting import (Integrator, PeriodicSolution, ShootingProblem, _problem_from_state,
+                       forcing, steady_state)
 
 
 @dataclass(repr=False)
@@ -211,9 +213,10 @@ class FrequencyResponse(Summary):
 def load(path):
     """Read a FrequencyResponse written by ``FrequencyResponse.save`` (the format:
     nlbeam.app.files.frequency_response_hdf5)."""
+    from nlbeam._validate import path_like
     from nlbeam.app.files.frequency_response_hdf5 import load_frequency_response
 
-    return load_frequency_response(path)
+    return load_frequency_response(path_like("path", path))
 
 
 # --- building branches ---------------------------------------------------------------------------
@@ -872,6 +875,12 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
     branch points stay those of the integrator (dt_scale, steps_per_contact) given.
     Returns a FrequencyResponse (``settings['stability']`` says which).
     """
+    _args.check_integrator("frequency_response", integrator, integrator_kw,
+                           inspect.signature(frequency_response).parameters)
+    _args.check_frequency_response(model, amplitude, f_range, orders, n_grid, segments, switch,
+                                   brute_force_grid, starts, stability, progress)
+    _args.check_trace(ds, ds_max, max_angle, max_points, tol, bif_tol)
+    _args.check_accuracy(accuracy)
     integrator = integrator or Integrator(**integrator_kw)
     f_lo, f_hi = map(float, f_range)
     if not (0 < f_lo < f_hi):
@@ -912,7 +921,17 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
     it); a ContinuationWarning lists the parts of p_range the branch does not cover (for an
     order-1 solution; for higher orders the gaps next to ends where the tracer gave up).
     accuracy: as for frequency_response (errors in the units of the parameter)."""
+    _args.check_integrator("continue_parameter", integrator, integrator_kw,
+                           inspect.signature(continue_parameter).parameters)
+    _args.check_model(model)
     check_parameter(model, parameter, extra=("frequency", "amplitude"))
+    if not isinstance(solution, PeriodicSolution):
+        raise _args.ArgumentTypeError(f"solution: must be a continuation.PeriodicSolution, got "
+                                      f"{type(solution).__name__}")
+    _args.check_p_range(parameter, model, p_range, solution)
+    _args.integer("segments", segments, 1, _args.MAX_SEGMENTS)
+    _args.check_trace(ds, ds_max, max_angle, max_points, tol, bif_tol)
+    _args.check_accuracy(accuracy)
     integrator = integrator or Integrator(**integrator_kw)
     lo, hi = map(float, p_range)
     tracer = Tracer(p_min=lo, p_max=hi, ds=ds, ds_max=ds_max, max_angle=max_angle,

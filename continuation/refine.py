@@ -143,6 +143,9 @@ def refine(model, bifurcation, amplitude=None, *, levels=LEVELS, segments=1, tol
     while the estimated digits are below ``target_digits``, halve the step again (up to
     ``max_levels`` levels in all; fixed-step levels only). If the first level does not converge
     from the diagram's point, it is approached through dt_scale 1/2 first. Returns a Refined."""
+    from ._arguments import check_refine_one
+
+    check_refine_one(model, bifurcation, levels, segments, tol, target_digits, max_levels)
     A = bifurcation_amplitude(bifurcation, amplitude)
     f, s0 = bifurcation.frequency, (bifurcation.state0, getattr(bifurcation, "disc0", None))
     vals, secs, errs = [], [], []
@@ -213,6 +216,9 @@ def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders
     a grazing point (``Bifurcation.smooth`` False), keep their values and errors and get
     ``refined = None``; ``refine_status`` says which ('refined' or 'failed: <reason>'; both
     saved with the diagram). Returns the list of (bifurcation, Refined or the error)."""
+    from ._arguments import check_refine
+
+    check_refine(frc, model, kinds, orders, levels, segments, tol, target_digits, max_levels)
     if frc.parameter != "frequency":
         raise ValueError("frc: refine_bifurcations needs a frequency diagram")
     out = []

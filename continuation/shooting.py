@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import inspect
 import math
 import warnings
 from dataclasses import dataclass
@@ -22,7 +23,7 @@ import numpy as np
 import nlbeam
 from nlbeam.integrate import FlowMap
 from nlbeam.parameters import get_parameter, with_parameter
-from nlbeam._validate import choice
+from nlbeam._validate import choice, positive, real_array
 from nlbeam.summary import Summary, field_rows
 from nlbeam.solver import Solver, period_step, phase_step
 from nlbeam.vocabulary import METHODS as METHOD_NAMES
@@ -53,8 +54,7 @@ class Integrator:
 
     def __post_init__(self):
         choice("method", self.method, METHOD_NAMES)
-        if not (math.isfinite(self.dt_scale) and self.dt_scale > 0):
-            raise ValueError(f"dt_scale: must be finite and > 0, got {self.dt_scale!r}")
+        positive("dt_scale", self.dt_scale)
         _ = self.solver  # a Solver checks steps_per_contact, rtol, atol
 
     @functools.cached_property
@@ -331,8 +331,11 @@ class ShootingProblem(Problem):
         return M
 
     def multipliers(self, Ms):
-        mu = np.linalg.eigvals(self.monodromy(Ms))
-        return mu[np.argsort(-np.abs(mu), kind="stable")]
+        """Floquet multipliers, largest modulus first; in product form over the segments
+        when their spread would cost the small ones their digits (continuation._floquet)."""
+        from ._floquet import multipliers
+
+        return multipliers(Ms, self.monodromy(Ms))
 
     def boundary_clearance(self, u, p):
         model, ex = self.forcing(p)
@@ -635,6 +638,15 @@ def periodic_solution(model, amplitude, frequency, order=1, guess=None, *, segme
     returned at the first integrator that meets both (``integrator`` says which), with a
     ContinuationWarning if none does.
     """
+    from . import _arguments as _args
+
+    _args.check_integrator("periodic_solution", integrator, integrator_kw,
+                           inspect.signature(periodic_solution).parameters)
+    _args.check_periodic_solution(model, amplitude, frequency, order, segments, tol, max_iter,
+                                  stability, error)
+    _args.check_accuracy(accuracy)
+    if guess is not None and not isinstance(guess, PeriodicSolution):
+        real_array("guess", guess)
     if integrator is None:
         integrator = Integrator(**integrator_kw)
     if accuracy is None:

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import finite, positive
+from ._validate import finite, nonnegative, positive, real_array
 
 HARMONIC = 0
 SAMPLED = 1
@@ -107,8 +107,9 @@ class Sampled(Excitation):
     def __post_init__(self):
         finite("t_start", self.t_start)
         positive("h", self.h, unit="s")
-        y = np.ascontiguousarray(self.y, dtype=float)
-        yd = np.ascontiguousarray(self.yd, dtype=float)
+        nonnegative("max_freq", self.max_freq, unit="Hz")
+        y = np.ascontiguousarray(real_array("y", self.y, finite_values=False))
+        yd = np.ascontiguousarray(real_array("yd", self.yd, finite_values=False))
         if y.ndim != 1 or y.shape != yd.shape or y.size < 2:
             raise ValueError("y, yd: must be 1-D arrays of equal length >= 2")
         tab = np.empty((y.size, 3))
@@ -117,7 +118,7 @@ class Sampled(Excitation):
         if self.ydd is None:
             tab[:, 2] = np.nan  # kernel falls back to linear interpolation of y'
         else:
-            ydd = np.asarray(self.ydd, dtype=float)
+            ydd = real_array("ydd", self.ydd, finite_values=False)
             if ydd.shape != y.shape:
                 raise ValueError("ydd: must have the shape of y")
             tab[:, 2] = ydd
@@ -152,9 +153,8 @@ class CosineSum(Excitation):
     tab: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
-        f = np.atleast_1d(np.asarray(self.frequencies, dtype=float))
-        a = np.atleast_1d(np.asarray(self.amplitudes, dtype=float))
-        ph = np.atleast_1d(np.asarray(self.phases, dtype=float))
+        f, a, ph = (np.atleast_1d(real_array(n, getattr(self, n), finite_values=False))
+                    for n in ("frequencies", "amplitudes", "phases"))
         if not (f.shape == a.shape == ph.shape) or f.ndim != 1 or f.size == 0:
             raise ValueError("frequencies, amplitudes, phases: must be 1-D arrays of one length "
                              ">= 1")

@@ -9,9 +9,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _kernels as _k
-from ._validate import finite, positive
+from ._validate import (ArgumentTypeError, check_count, check_memory, finite, flag, integer,
+                        positive, real_array)
 from .excitation import Excitation
-from .solver import METHODS, MIN_STEPS_PER_CONTACT, Solver, warn_few_contact_steps
+from .solver import (METHODS, MIN_STEPS_PER_CONTACT, Solver, warn_few_contact_steps,
+                     warn_stiffened)
 from .summary import Summary
 
 __all__ = ["integrate", "flow", "FlowMap", "Trajectory", "Flow", "IntegrationError",
@@ -121,17 +123,40 @@ def _check_span(span, t0, t_end):
 
 def _check_model(model, excitation):
     if not hasattr(model, "kernel_arrays"):
-        raise ValueError("model: must be an nlbeam model (BeamImpact, Duffing, System, ...)")
+        raise ArgumentTypeError(f"model: must be an nlbeam model (BeamImpact, Duffing, System, "
+                                f"...), got {type(model).__name__}")
     if not isinstance(excitation, Excitation):
-        raise ValueError("excitation: must be an nlbeam.Excitation (Harmonic, Sampled, ...)")
+        raise ArgumentTypeError(f"excitation: must be an nlbeam.Excitation (Harmonic, Sampled, "
+                                f"...), got {type(excitation).__name__}")
+
+
+def _check_steps(where, duration, dt, method, max_steps):
+    """Refuse a fixed-step span of duration (s) at step dt (s) longer than max_steps steps
+    before any work starts (the adaptive method's steps are not known in advance: its kernel
+    stops at max_steps)."""
+    if method != "adaptive":
+        check_count(f"{where}: steps of dt = {dt:.4g} s over {duration:.6g} s", duration / dt,
+                    max_steps, "give a larger dt (or dt=None), a shorter span, or raise "
+                    "max_steps")
+
+
+def _check_disc(model, disc0, name="disc0"):
+    """The contact state (n_elements, 2): [in contact 0/1, delta'_minus >= 0 (m/s)]."""
+    ne = model.n_elements
+    disc = real_array(name, disc0, shape=(ne, 2)) if np.ndim(disc0) == 2 else \
+        real_array(name, disc0, shape=(2 * ne,)).reshape(ne, 2)
+    if np.any((disc[:, 0] != 0) & (disc[:, 0] != 1)) or np.any(disc[:, 1] < 0):
+        raise ValueError(f"{name}: rows must be [in contact 0 or 1, onset rate >= 0 m/s], got "
+                         f"{disc.tolist()}")
+    return np.array(disc, dtype=float)
 
 
 def _prepare(model, excitation, solver, t0, t_end):
     """Check the arguments of one integration from t0 to t_end (s) with ``solver``; returns
     (dt (s), steps per contact)."""
     _check_model(model, excitation)
-    finite("t0", t0)
-    finite("t_end", t_end)
+    t0 = finite("t0", t0, unit="s")
+    t_end = finite("t_end", t_end, unit="s")
     if not t_end > t0:
         raise ValueError(f"t_end: must be > t0 = {t0!r} s, got {t_end!r}")
     dt = solver.step(model, excitation)
@@ -144,6 +169,8 @@ def _state(model, state, name):
     N = model.n_dof
     if state is None:
         return np.zeros(2 * N)
+    if not (isinstance(state, np.ndarray) and state.dtype.kind == "f"):  # the fast path
+        state = real_array(name, state, finite_values=False)
     s0 = np.array(state, dtype=float).ravel()
     if s0.shape != (2 * N,) or not np.all(np.isfinite(s0)):
         raise ValueError(f"{name}: must be a finite state [x_1..x_N, v_1..v_N] of length {2 * N}")
@@ -159,7 +186,7 @@ def _initial(model, x0, disc0, t0, excitation):
         disc = Solver.start_contact(model.element_geometry(), s0, y[0], yd[0],
                                     Solver.event_elements(model))
     else:
-        disc = np.array(disc0, dtype=float).reshape(model.n_elements, 2)
+        disc = _check_disc(model, disc0)
     return s0, disc
 
 
@@ -175,6 +202,10 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
         n_out = n_grid // store_every + 2
     else:
         n_out = 0
+    check_memory(f"integrate: {n_out:.3g} stored samples of {2 * N + 2 * ne + 1} values",
+                 8.0 * n_out * (2 * N + 2 * ne + 1) + 32.0 * int(event_log),
+                 "raise store_every (0 keeps only the end state), a larger dt or a shorter "
+                 "span")
     out_t = np.empty(n_out)
     out_s = np.empty((n_out, 2 * N))
     out_d = np.empty((n_out, ne))
@@ -230,8 +261,12 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
     """
     solver = Solver(method, dt, steps_per_contact, rtol, atol, events, graded)
     dt, spc = _prepare(model, excitation, solver, t0, t_end)
-    if int(store_every) < 0:
-        raise ValueError(f"store_every: must be an integer >= 0, got {store_every!r}")
+    t0, t_end = float(t0), float(t_end)
+    store_every = integer("store_every", store_every, 0)
+    event_log = integer("event_log", event_log, 0)
+    max_steps = integer("max_steps", max_steps, 1)
+    flag("warn", warn)
+    _check_steps("integrate", t_end - t0, dt, method, max_steps)
     s0, disc = _initial(model, x0, disc0, t0, excitation)
     N = model.n_dof
     ne = model.n_elements
@@ -240,6 +275,8 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
     (t, S, D, F, s_end, disc_end, _, _, xmax, c, fc, evl) = _run(
         model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s0, disc, events,
         False, P0, dvm0, True, store_every, graded, event_log, warn)
+    if warn:
+        warn_stiffened(model, method, dt, xmax, stacklevel=2)
     return Trajectory(t=t, x=S[:, :N], v=S[:, N:], delta=D, force=F, n_impacts=int(c[4]),
                       state_end=s_end, disc_end=disc_end, t_end=float(t_end), method=method,
                       dt=dt, steps_per_contact=spc, n_steps=int(c[1]), n_rejected=int(c[2]),
@@ -260,8 +297,13 @@ def flow(model, excitation, state0, t0, duration, *, monodromy=False, disc0=None
     warn: warn when a contact got fewer than 8 steps (fixed-step methods). One call of a
     ``FlowMap``; the step decisions are those of nlbeam.solver.Solver.
     """
-    finite("t0", t0)
-    finite("duration", duration)
+    t0 = finite("t0", t0, unit="s")
+    duration = finite("duration", duration, unit="s")
+    max_steps = integer("max_steps", max_steps, 1)
+    flag("monodromy", monodromy)
+    if disc0 is not None:
+        _check_model(model, excitation)
+        disc0 = _check_disc(model, disc0)
     fm = FlowMap(model, excitation, method=method, dt=dt, steps_per_contact=steps_per_contact,
                  rtol=rtol, atol=atol, events=events, graded=graded, warn=warn)
     fm._stacklevel = 3  # a warning points at flow's caller
@@ -329,7 +371,7 @@ class FlowMap:
         self.N, self.ne = N, ne
         self.geometry = model.element_geometry()
         self.event_el = solver.event_elements(model)
-        self.warn = bool(warn)
+        self.warn = flag("warn", warn)
         self._stacklevel = 2  # a warning points at the caller
         self._empty1 = np.empty(0)
         self._empty2 = np.empty((0, 2 * N))
@@ -376,6 +418,8 @@ class FlowMap:
                 self._dt_checked = dt
             elif not dt > 0:
                 raise ValueError(f"dt: must be > 0 s, got {dt!r}")
+        if duration > max_steps * dt:  # cheap: checked on every call
+            _check_steps("flow", duration, dt, self.method, max_steps)
         dt = self.solver.whole_step(duration, dt)
         N, ne = self.N, self.ne
         s0 = _state(self.model, state0, "state0")

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import choice, in_range, positive
+from ._validate import choice, in_range, integer, positive, real_array
 from .systems import Contact, System, _model_protocol
 from .vocabulary import BOUNDARY_CONDITIONS
 
@@ -125,12 +125,7 @@ class ModalBeam:
 
     def __post_init__(self):
         positive("length", self.length, unit="m")
-        if isinstance(self.n_modes, bool) or not isinstance(self.n_modes, (int, np.integer)):
-            raise ValueError(f"n_modes: must be an integer in [1, {MAX_MODES}], got "
-                             f"{self.n_modes!r}")
-        if not 1 <= int(self.n_modes) <= MAX_MODES:
-            raise ValueError(f"n_modes: must be an integer in [1, {MAX_MODES}], got "
-                             f"{self.n_modes!r}")
+        integer("n_modes", self.n_modes, 1, MAX_MODES)
         choice("bc", self.bc, BOUNDARY_CONDITIONS)
         L = float(self.length)
         hi_open = self.bc == "clamped-clamped"
@@ -150,7 +145,7 @@ class ModalBeam:
         stop = _FrameStop(0, self.contact, self.K_hertz, e=self.e, mu=self.mu, gap=self.gap,
                           clamp=self.clamp)  # validates the stop's parameters
         N = int(self.n_modes)
-        z = np.atleast_1d(np.asarray(self.zeta, dtype=float))
+        z = np.atleast_1d(real_array("zeta", self.zeta, finite_values=False))
         if z.size == 1:
             z = np.full(N, z[0])
         if z.shape != (N,) or not np.all(np.isfinite(z)) or np.any(z < 0):
@@ -317,7 +312,7 @@ class ModalBeam:
 
     def parameters(self) -> dict:
         I, A = self.section
-        z = np.atleast_1d(np.asarray(self.zeta, dtype=float))
+        z = np.atleast_1d(real_array("zeta", self.zeta, finite_values=False))
         return {"model": "ModalBeam", "n_modes": self.n_modes, "bc": self.bc,
                 "length": float(self.length), "I": I, "A": A, "E": float(self.E),
                 "density": float(self.density), "stop_position": float(self.stop_position),

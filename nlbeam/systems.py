@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _kernels as _k
-from ._validate import choice, finite, in_range, nonnegative, positive
+from ._validate import (ArgumentTypeError, choice, finite, flag, in_range, integer,
+                        nonnegative, positive, real, real_array)
 from .vocabulary import CONTACT_LAWS
 
 _LAW_CODE = {"hertz": _k.HERTZ, "lankarani-nikravesh": _k.LANKARANI,
@@ -34,7 +35,7 @@ def hertz_stiffness(E1, nu1, R1, E2, nu2, R2):
     for n, v in (("nu1", nu1), ("nu2", nu2)):
         in_range(n, v, -1.0, 0.5, lo_open=True, hi_open=True)
     for n, v in (("R1", R1), ("R2", R2)):
-        if not (float(v) > 0):
+        if not (real(n, v) > 0):
             raise ValueError(f"{n}: must be > 0 m (inf for a flat), got {v!r}")
     Er = 2.0 / ((1 - nu1 ** 2) / E1 + (1 - nu2 ** 2) / E2)
     Rr = 1.0 / (1.0 / R1 + 1.0 / R2)
@@ -65,15 +66,24 @@ def e_from_mu(mu, K_hertz, v_ref):
 def _location(dof, n_dof, name="dof"):
     w = np.zeros(n_dof)
     if np.ndim(dof) == 0:
-        i = int(dof)
-        if not 0 <= i < n_dof:
-            raise ValueError(f"{name}: must be a DOF index in [0, {n_dof - 1}], got {dof!r}")
-        w[i] = 1.0
+        w[integer(name, dof, 0, n_dof - 1)] = 1.0
     else:
-        w = np.asarray(dof, dtype=float)
-        if w.shape != (n_dof,) or not np.all(np.isfinite(w)):
-            raise ValueError(f"{name}: must be an int or a finite vector of length {n_dof}")
+        w = real_array(name, dof, shape=(n_dof,))
     return w
+
+
+def _check_dof(dof, name="dof"):
+    """A DOF index (integer >= 0) or a finite vector (the model's size is checked later)."""
+    if isinstance(dof, str) or np.ndim(dof) == 0:
+        integer(name, dof, 0)
+    else:
+        real_array(name, dof, ndim=1, min_size=1)
+
+
+def _check_element(self):
+    """The checks every element shares: dof, on_base."""
+    _check_dof(self.dof)
+    flag("on_base", self.on_base)
 
 
 @dataclass(frozen=True)
@@ -99,10 +109,15 @@ class Contact:
     clamp: bool = True
 
     def __post_init__(self):
+        _check_element(self)
+        flag("clamp", self.clamp)
         choice("law", self.law, CONTACT_LAWS)
         nonnegative("K", self.K, unit="N/m^1.5")
         finite("gap", self.gap)
         choice("side", self.side, (1, -1))
+        for n in ("e", "mu"):
+            if getattr(self, n) is not None:
+                real(n, getattr(self, n))
         if self.law == "lankarani-nikravesh":
             if self.e is None:
                 raise ValueError("e: required by the lankarani-nikravesh law, must lie in (0, 1]")
@@ -132,6 +147,7 @@ class PiecewiseLinearStop:
     on_base: bool = True
 
     def __post_init__(self):
+        _check_element(self)
         nonnegative("k", self.k, unit="N/m")
         finite("gap", self.gap)
         choice("side", self.side, (1, -1))
@@ -153,12 +169,17 @@ class CubicSpring:
     on_base: bool = False
 
     def __post_init__(self):
+        _check_element(self)
         finite("k3", self.k3)
 
     def arrays(self, n_dof, kind):
         w = _location(self.dof, n_dof)
         wy = -1.0 if (self.on_base and kind == "base") else 0.0
         return _k.CUBIC, w, wy, 0.0, [float(self.k3), 0.0, 0.0, 0.0]
+
+
+def _load(name, value):
+    return real_array(name, value, finite_values=False)
 
 
 # --- the general system ---------------------------------------------------------------------------
@@ -186,9 +207,8 @@ class System:
     _arrays: tuple = field(init=False, repr=False)
 
     def __post_init__(self):
-        M = np.atleast_2d(np.asarray(self.M, dtype=float))
-        C = np.atleast_2d(np.asarray(self.C, dtype=float))
-        K = np.atleast_2d(np.asarray(self.K, dtype=float))
+        M, C, K = (np.atleast_2d(real_array(n, getattr(self, n), finite_values=False))
+                   for n in ("M", "C", "K"))
         N = M.shape[0]
         for name, A in (("M", M), ("C", C), ("K", K)):
             if A.shape != (N, N):
@@ -198,13 +218,24 @@ class System:
         if not np.allclose(M, M.T) or np.linalg.eigvalsh(0.5 * (M + M.T)).min() <= 0:
             raise ValueError("M: must be symmetric positive definite (masses > 0 kg)")
         choice("excitation_kind", self.excitation_kind, ("base", "force"))
+        if isinstance(self.elements, (str, bytes)) or not hasattr(self.elements, "__iter__"):
+            raise ArgumentTypeError(f"elements: must be a tuple of elements (Contact, "
+                                    f"PiecewiseLinearStop, CubicSpring), got {self.elements!r}")
+        for i, el in enumerate(self.elements):
+            if not hasattr(el, "arrays"):
+                raise ArgumentTypeError(f"elements[{i}]: must be an element (Contact, "
+                                        f"PiecewiseLinearStop, CubicSpring), got {el!r}")
+        if self.output_dof is not None:
+            integer("output_dof", self.output_dof, 0, N - 1)
+        if not isinstance(self.name, str):
+            raise ArgumentTypeError(f"name: must be a string, got {self.name!r}")
         ones = np.ones(N)
         if self.excitation_kind == "base":
-            yl = K @ ones if self.y_load is None else np.asarray(self.y_load, dtype=float)
-            ydl = C @ ones if self.yd_load is None else np.asarray(self.yd_load, dtype=float)
+            yl = K @ ones if self.y_load is None else _load("y_load", self.y_load)
+            ydl = C @ ones if self.yd_load is None else _load("yd_load", self.yd_load)
         else:
-            yl = np.eye(N)[0] if self.y_load is None else np.asarray(self.y_load, dtype=float)
-            ydl = np.zeros(N) if self.yd_load is None else np.asarray(self.yd_load, dtype=float)
+            yl = np.eye(N)[0] if self.y_load is None else _load("y_load", self.y_load)
+            ydl = np.zeros(N) if self.yd_load is None else _load("yd_load", self.yd_load)
         for name, v in (("y_load", yl), ("yd_load", ydl)):
             if v.shape != (N,) or not np.all(np.isfinite(v)):
                 raise ValueError(f"{name}: must be a finite vector of length {N}")
@@ -242,7 +273,8 @@ class System:
         if self.custom_force is not None and not hasattr(self.custom_force, "py_func"):
             raise ValueError("custom_force: must be a numba-jitted function "
                              "force(t, x, v, y, yd, params, out) (see nlbeam.custom)")
-        upar = np.atleast_1d(np.asarray(self.custom_params, dtype=float)).copy()
+        upar = np.atleast_1d(real_array("custom_params", self.custom_params,
+                                        finite_values=False)).copy()
         if upar.size == 0:
             upar = np.zeros(1)
         if not np.all(np.isfinite(upar)):
@@ -359,6 +391,7 @@ class BeamImpact:
         nonnegative("k", self.k, unit="N/m")
         nonnegative("b", self.b, unit="kg/s")
         nonnegative("K_hertz", self.K_hertz, unit="N/m^1.5")
+        flag("clamp", self.clamp)
         in_range("e", self.e, 0.0, 1.0, lo_open=True)
         choice("contact", self.contact, CONTACT_LAWS)
         if self.contact == "hunt-crossley" and self.mu is None:

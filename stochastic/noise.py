@@ -83,7 +83,8 @@ import numpy as np
 import scipy.fft
 import scipy.special
 
-from nlbeam._validate import finite, positive
+from nlbeam._validate import (ArgumentTypeError, check_memory, choice, finite, positive,
+                              real_array)
 from nlbeam.excitation import CosineSum, Excitation, Sampled
 
 from . import _kernels
@@ -119,6 +120,9 @@ def _seed_entropy(seed):
 
 
 def _check_band(band):
+    if isinstance(band, (str, bytes, dict)):
+        raise ArgumentTypeError(f"band: must be a pair (f_lo, f_hi) in Hz with 0 <= f_lo < f_hi, "
+                                f"got {band!r}")
     try:
         lo, hi = band
     except (TypeError, ValueError):
@@ -289,6 +293,9 @@ class _BlockNoise(Excitation):
         self.n_fft = scipy.fft.next_fast_len(nb + nf + 2)
         self.df = 1.0 / (self.n_fft * self.h)
         self.n_lines = int(math.ceil((self.band[1] - self.band[0]) / self.df))
+        # one realization: the complex spectrum, the real signal and its derivatives
+        check_memory(f"block synthesis: FFTs of {self.n_fft:.3g} points", 64.0 * self.n_fft,
+                     "give a shorter block_duration, or a larger h")
         self._cache = OrderedDict()
 
     @property
@@ -310,7 +317,7 @@ class _BlockNoise(Excitation):
         if not np.all(np.isfinite(g)) or np.any(g < 0):
             bad = f[~(np.isfinite(g) & (g >= 0))][0]
             raise ValueError(f"psd: must be finite and >= 0 on the band, got "
-                             f"{self._G(np.array([bad]))!r} at {bad!r} Hz")
+                             f"{float(self._G(np.array([bad]))[0]):.6g} at {float(bad):.9g} Hz")
         return g * self.df
 
     def _check_lines(self):
@@ -608,12 +615,21 @@ class SpectralNoise(_BlockNoise):
             self._table_f = None
             self._fn = psd
             probe = np.linspace(lo, hi, 1001)
-            g = np.asarray(psd(probe), dtype=float)
+            try:
+                g = psd(probe)
+            except Exception as exc:
+                raise ValueError(f"psd: the callable raised {type(exc).__name__}: {exc} when "
+                                 f"called with an array of {probe.size} frequencies on the band "
+                                 f"{self.band} Hz") from exc
+            g = real_array("psd", g, finite_values=False)
             if g.shape != probe.shape:
                 g = np.broadcast_to(g, probe.shape)
             if not np.all(np.isfinite(g)) or np.any(g < 0):
                 raise ValueError("psd: must return finite values >= 0 (u^2/Hz) on the band")
         else:
+            if isinstance(psd, (str, bytes, dict)):
+                raise ArgumentTypeError(f"psd: must be a callable f -> G or a table (f, G), got "
+                                        f"{type(psd).__name__}")
             try:
                 f_tab, g_tab = (np.asarray(a, dtype=float) for a in psd)
             except (TypeError, ValueError):
@@ -819,8 +835,10 @@ class Recorded(Excitation):
     def __init__(self, t, y, *, h=None, bc_type="not-a-knot"):
         from scipy.interpolate import CubicSpline
 
-        t = np.asarray(t, dtype=float)
-        y = np.asarray(y, dtype=float)
+        t = real_array("t", t, finite_values=False)
+        y = real_array("y", y, finite_values=False)
+        if isinstance(bc_type, str):
+            choice("bc_type", bc_type, ("not-a-knot", "natural", "clamped", "periodic"))
         if t.ndim != 1 or t.shape != y.shape or t.size < 4:
             raise ValueError("t, y: must be 1-D arrays of one length >= 4")
         if _kernels.all_finite(t) >= 0:
@@ -835,6 +853,10 @@ class Recorded(Excitation):
             h = float(dt.mean()) if uniform else float(np.median(dt)) / 4.0
         else:
             h = positive("h", h, unit="s")
+            if h > float(np.median(dt)) * (1 + 1e-12):
+                raise ValueError(f"h: {h!r} s is coarser than the record's sampling step "
+                                 f"{float(np.median(dt)):.6g} s (median): the table would lose "
+                                 f"the record's detail; give h <= that step, or None")
         n = int(math.floor((t[-1] - t[0]) / h * (1 + 1e-12))) + 1
         if n > _MAX_TABLE_SAMPLES:
             raise ValueError(f"h: {h:.6g} s would tabulate {n:.3g} samples (> "

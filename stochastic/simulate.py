@@ -16,8 +16,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from nlbeam._validate import nonnegative, positive
+from nlbeam._validate import (ArgumentTypeError, callable_or_none, check_count, check_memory,
+                              choice, choices, integer, nonnegative, positive, real_array)
 from nlbeam.summary import Summary, describe_value
+from nlbeam.vocabulary import METHODS
 from nlbeam.vocabulary import CHANNELS
 
 from .assemble import feed, make_estimators, store_results
@@ -26,6 +28,13 @@ __all__ = ["simulate", "StochasticResult", "load", "ensemble", "EnsembleResult",
            "default_transient"]
 
 OUTPUTS = ("psd", "pdf", "moments")
+#: default limit of the integration samples (transient + duration) / dt of one simulate call
+#: (``max_samples``): 1e8 samples are 4.3 h of a 200 Hz band at the default 6.4 kHz, tens of
+#: minutes of CPU
+MAX_SAMPLES = 100_000_000
+#: a block noise may synthesize this many table samples per allowed integration sample (its
+#: step h is finer than dt, and an FFT sample is cheap: 1e9 samples of a 200 Hz band: 3 h)
+SYNTHESIS_PER_SAMPLE = 10
 
 
 def _parse_channel(name, model):
@@ -233,9 +242,10 @@ class StochasticResult(Summary):
 def load(path) -> StochasticResult:
     """Read a :class:`StochasticResult` written by ``save`` (the format:
     nlbeam.app.files.stochastic_hdf5)."""
+    from nlbeam._validate import path_like
     from nlbeam.app.files.stochastic_hdf5 import load_stochastic_result
 
-    return load_stochastic_result(path)
+    return load_stochastic_result(path_like("path", path))
 
 
 def _history_window(window, t_kept, duration):
@@ -255,6 +265,18 @@ def _history_window(window, t_kept, duration):
     return t_kept + w0, t_kept + w1
 
 
+def _check_nyquist(excitation, dt, store_every):
+    """Raise ValueError naming dt when the excitation's highest frequency (Hz) is above the
+    Nyquist frequency 1/(2 dt store_every) of the samples (its PSD peak would alias)."""
+    f_max = float(excitation.max_frequency())
+    nyq = 0.5 / (dt * store_every)
+    if f_max > nyq * (1 + 1e-9):
+        raise ValueError(f"dt: samples every {dt * store_every:.6g} s (dt {dt:.6g} s x "
+                         f"store_every {store_every}) have Nyquist frequency {nyq:.6g} Hz, below "
+                         f"the excitation's highest frequency {f_max:.6g} Hz (it would show at an "
+                         f"aliased frequency); use dt * store_every < {0.5 / f_max:.6g} s")
+
+
 def _default_resolution(duration):
     # >= ~31 Welch averages (50 % overlap), never finer than 0.05 Hz
     return max(0.05, 16.0 / duration)
@@ -264,7 +286,7 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
              method="adaptive", dt=None, rtol=1e-8, atol=1e-12, seed=None, psd_resolution=None,
              keep_history=None, *, x0=None, store_every=1, steps_per_contact=None,
              chunk_duration=None, pdf_bins=200, pdf_edges=None, batch_duration=None,
-             progress=None) -> StochasticResult:
+             progress=None, max_samples=MAX_SAMPLES) -> StochasticResult:
     """Simulate ``model`` under ``excitation`` for ``transient + duration`` seconds and
     return the statistics of the last ``duration`` seconds.
 
@@ -292,6 +314,11 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     batches the errors use are chosen from the measured correlation time (see
     ``StochasticResult.moments``).
     progress: callable(t_done_s, t_total_s) called after every chunk, or True to print.
+    max_samples: refuse a run of more integration samples (transient + duration) / dt than
+    this before it starts (default MAX_SAMPLES = 1e8), or a block noise that would synthesize
+    more than SYNTHESIS_PER_SAMPLE (10) times as many table samples.
+    Every excitation's highest frequency must lie below the sampling Nyquist frequency
+    fs/2 (checked: a harmonic input above it would show at an aliased frequency).
 
     A noise whose line spacing is too coarse for the damping of the model's linear modes
     (predicted kurtosis bias of a mode's response above 0.01, ``noise.kurtosis_bias``) is
@@ -316,15 +343,29 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     duration = positive("duration", duration, unit="s")
     if isinstance(outputs, str):
         outputs = (outputs,)
-    outputs = tuple(outputs)
-    for o in outputs:
-        if o not in OUTPUTS:
-            raise ValueError(f"outputs: must be a subset of {OUTPUTS}, got {o!r}")
+    outputs = choices("outputs", outputs, OUTPUTS)
+    if not outputs:
+        raise ValueError(f"outputs: give at least one of {OUTPUTS}, got ()")
     if isinstance(channels, str):
         channels = (channels,)
+    if not hasattr(channels, "__iter__"):
+        raise ArgumentTypeError(f"channels: must be a tuple of channel names, got {channels!r}")
     channels = tuple(channels)
     if not channels:
         raise ValueError("channels: give at least one channel")
+    for ch in channels:
+        if not isinstance(ch, str):
+            raise ArgumentTypeError(f"channels: must be names such as 'x' or 'delta[0]', got "
+                                    f"{ch!r}")
+    choice("method", method, METHODS)
+    positive("rtol", rtol)
+    positive("atol", atol)
+    max_samples = positive("max_samples", max_samples)
+    pdf_bins = integer("pdf_bins", pdf_bins, 1, 10_000_000)
+    if pdf_edges is not None:
+        real_array("pdf_edges", pdf_edges, ndim=1, min_size=2)
+    if progress is not True:
+        callable_or_none("progress", progress, "a callable(t_done, t_total), True")
     parsed = {ch: _parse_channel(ch, model) for ch in channels}
     if transient is None:
         transient = default_transient(model)
@@ -338,6 +379,18 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     fs = 1.0 / (dt * store_every)
     if hasattr(excitation, "check_band_vs_step"):
         excitation.check_band_vs_step(dt * store_every)
+    else:
+        _check_nyquist(excitation, dt, store_every)
+    check_count(f"simulate: integration samples of dt = {dt:.4g} s over transient + duration "
+                f"= {transient + duration:.6g} s", (transient + duration) / dt, max_samples,
+                "give a larger dt (or store_every), a shorter duration or transient, a "
+                "narrower band, or raise max_samples")
+    if getattr(excitation, "n_block", None) is not None:  # a block noise: its synthesis
+        check_count(f"simulate: noise samples of h = {excitation.h:.4g} s synthesized over "
+                    f"transient + duration = {transient + duration:.6g} s",
+                    (transient + duration) / excitation.h, SYNTHESIS_PER_SAMPLE * max_samples,
+                    "give a narrower band (h follows its upper edge), a shorter duration or "
+                    "transient, or raise max_samples")
     t0 = float(excitation.time_span()[0]) if math.isfinite(excitation.time_span()[0]) else 0.0
     n_tr = int(round(transient / (dt * store_every))) * store_every  # steps, on the sample grid
     n_keep = int(round(duration / (dt * store_every))) * store_every
@@ -353,10 +406,17 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     if chunk_duration is None:
         chunk_duration = getattr(excitation, "block_duration", 1.0)
     chunk_duration = positive("chunk_duration", chunk_duration, unit="s")
+    if chunk_duration < 2 * dt * store_every:
+        raise ValueError(f"chunk_duration: must span at least 2 samples (>= "
+                         f"{2 * dt * store_every:.3g} s), got {chunk_duration!r}")
     m = max(int(round(chunk_duration / (dt * store_every))), 2) * store_every  # steps per chunk
     if psd_resolution is None:
         psd_resolution = _default_resolution(n_keep * dt)
     psd_resolution = positive("psd_resolution", psd_resolution, unit="Hz")
+    if "psd" in outputs:
+        check_memory(f"psd_resolution: Welch segments of {fs / psd_resolution:.3g} samples for "
+                     f"{len(channels)} channel(s)", 48.0 * fs / psd_resolution * len(channels),
+                     "give a coarser psd_resolution (Hz), or a larger dt or store_every")
     if "psd" in outputs and psd_resolution * n_keep * dt < 1.0:
         raise ValueError(f"psd_resolution: {psd_resolution} Hz needs segments of "
                          f"{1 / psd_resolution:.3g} s, longer than duration {n_keep * dt:.3g} s")
@@ -365,6 +425,9 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     if keep_history is not None:
         h0, h1 = _history_window(keep_history, t0 + n_tr * dt, n_keep * dt)
         h_tol = 1e-6 * dt * store_every  # the ends are samples: round-off of the grid times
+        n_hist = (h1 - h0) * fs + 1
+        check_memory(f"keep_history: {n_hist:.3g} samples of {len(channels) + 1} series",
+                     8.0 * n_hist * (len(channels) + 1), "give a shorter keep_history window")
     if progress is True:
         def progress(done, total):  # noqa: F811 - the printing default
             print(f"stochastic.simulate: {done:.4g} / {total:.4g} s", file=sys.stderr)
@@ -699,7 +762,32 @@ def ensemble(model, make_excitation, seeds, duration, *, processes=None,
     """Run ``simulate`` once per seed (excitation ``make_excitation(seed)``) in a process
     pool and combine. make_excitation must be picklable (a module-level function) unless
     ``processes=1`` (run in this process). Other keywords go to :func:`simulate`."""
-    seeds = list(seeds)
+    import inspect
+    import pickle
+
+    if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__iter__"):
+        raise ArgumentTypeError(f"seeds: must be a list of non-negative integers, got {seeds!r}")
+    seeds = [integer("seeds", s, 0) for s in seeds]
+    if processes is not None:
+        processes = integer("processes", processes, 1, 4096)
+    if not callable(make_excitation):
+        raise ArgumentTypeError(f"make_excitation: must be a callable seed -> excitation, got "
+                                f"{type(make_excitation).__name__}")
+    names = [n for n in inspect.signature(simulate).parameters
+             if n not in ("model", "excitation", "seed", "duration")]
+    for k in kwargs:
+        if k not in names:
+            from nlbeam._validate import keywords
+
+            keywords("ensemble", {k: None}, names + ["processes"])
+    if processes != 1 and len(seeds) > 1:
+        try:
+            pickle.dumps(make_excitation)
+        except Exception as exc:
+            raise ArgumentTypeError(f"make_excitation: cannot be sent to the worker processes "
+                                    f"({type(exc).__name__}: {exc}); define it at module level "
+                                    "(not a lambda or a local function), or pass processes=1") \
+                from None
     if len(seeds) < 1:
         raise ValueError("seeds: give at least one seed")
     if len(set(seeds)) != len(seeds):

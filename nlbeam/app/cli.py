@@ -115,9 +115,19 @@ def _accuracy(text):
         return text
 
 
+def _check_out(args, *names):
+    """Before any work: each output file named in args (--out, --plot) can be written."""
+    from nlbeam._validate import output_file
+
+    for n in names:
+        if getattr(args, n, None):
+            output_file(f"--{n}", getattr(args, n))
+
+
 def _frc(args):
     import continuation
 
+    _check_out(args, "out", "plot")
     log = _log(args)
     _check_knobs(args, "periodic")
     model = _model(args)
@@ -225,6 +235,7 @@ def _refine(args):
 
 
 def _simulate(args):
+    _check_out(args, "out", "plot")
     import stochastic
 
     log = _log(args)
@@ -266,6 +277,7 @@ def _simulate(args):
 
 
 def _identify(args):
+    _check_out(args, "out", "plot")
     from nlbeam.identify import identify_contact
 
     from .files.columns import read_columns
@@ -286,6 +298,7 @@ def _identify(args):
 
 
 def _analyze(args):
+    _check_out(args, "out", "plot")
     import stochastic
 
     from .files.columns import read_columns
@@ -312,6 +325,7 @@ def _analyze(args):
 
 
 def _compare(args):
+    _check_out(args, "out", "plot")
     import continuation
     import stochastic
 

@@ -78,6 +78,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from nlbeam._validate import (ArgumentTypeError, integer, interval, nonnegative, positive,
+                              real_array)
 from nlbeam.summary import Summary
 
 __all__ = ["PeakMatch", "Resonance", "map_peaks", "find_peaks", "resonances", "KINDS"]
@@ -315,21 +317,26 @@ def map_peaks(psd, frc, excitation=None, *, min_prominence=0.3, background_hz=20
     hi) limits the peaks considered; ``max_multiple``: the largest k of a multiple of a
     stronger peak."""
     if tolerance is not None:
-        tolerance = float(tolerance)
-        if not (math.isfinite(tolerance) and tolerance > 0):
-            raise ValueError(f"tolerance: must be finite and > 0 Hz, got {tolerance!r}")
+        tolerance = positive("tolerance", tolerance, unit="Hz")
     if f_range is not None:
-        try:
-            lo, hi = (float(v) for v in f_range)
-        except (TypeError, ValueError):
-            raise ValueError(f"f_range: must be a pair (lo, hi) of Hz, got {f_range!r}") from None
-        if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
-            raise ValueError(f"f_range: must satisfy 0 <= lo < hi (Hz), got {f_range!r}")
-        f_range = (lo, hi)
-    if isinstance(max_multiple, bool) or not isinstance(max_multiple, int) or max_multiple < 1:
-        raise ValueError(f"max_multiple: must be an integer >= 1, got {max_multiple!r}")
-    f = np.asarray(psd[0], dtype=float)
-    P = np.asarray(psd[1], dtype=float)
+        f_range = interval("f_range", f_range, lo=0.0, unit="Hz")
+    integer("max_multiple", max_multiple, 1, 1000)
+    integer("max_superharmonic", max_superharmonic, 1, 1000)
+    positive("min_prominence", min_prominence)
+    positive("background_hz", background_hz, unit="Hz")
+    positive("tol_bins", tol_bins)
+    if asymmetry_below is not None:
+        nonnegative("asymmetry_below", asymmetry_below, unit="m")
+    if isinstance(psd, (str, bytes, dict)) or not hasattr(psd, "__len__") or len(psd) != 2:
+        raise ArgumentTypeError(f"psd: must be a pair (f Hz, P) of 1-D arrays, got "
+                                f"{type(psd).__name__}")
+    f = real_array("psd frequencies", psd[0], ndim=1, min_size=3, unit="Hz")
+    P = real_array("psd values", psd[1], shape=(f.size,))
+    if np.any(np.diff(f) <= 0):
+        raise ValueError("psd frequencies: must be strictly increasing (sort (f, P) by f)")
+    if not all(hasattr(frc, a) for a in ("branches", "bifurcations")):
+        raise ArgumentTypeError(f"frc: must be a continuation.FrequencyResponse (branches, "
+                                f"bifurcations), got {type(frc).__name__}")
     idx, prom, halfw, _ = find_peaks((f, P), min_prominence=min_prominence,
                                      background_hz=background_hz, tol_bins=tol_bins,
                                      f_range=f_range)

@@ -152,7 +152,7 @@ def test_f_range_limits_the_peaks(diagram):
     assert got == [40, 127, 190]
     got = [round(p.frequency) for p in map_peaks(psd, diagram, (0.0, 200.0), f_range=(0.0, 150.0))]
     assert got == [40, 127]
-    with pytest.raises(ValueError, match=r"f_range: must satisfy 0 <= lo < hi"):
+    with pytest.raises(ValueError, match=r"f_range: must be \(low, high\) with 0.0 <= low < high"):
         map_peaks(psd, diagram, f_range=(150.0, 10.0))
 
 

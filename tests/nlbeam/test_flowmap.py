@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import nlbeam
+from nlbeam._validate import BudgetError
 from nlbeam.integrate import FlowMap
 
 F = 44.0
@@ -54,5 +55,6 @@ def test_flowmap_checks_like_flow():
         fm([0.0, 0.0], 0.0, 0.01, dt=-1e-4)
     with pytest.raises(ValueError, match="stability limit"):
         fm([0.0, 0.0], 0.0, 0.01, dt=1.0)
-    with pytest.raises(nlbeam.IntegrationError, match="max_steps"):
+    # a fixed-step span beyond max_steps is refused before the kernel runs (100 steps > 5)
+    with pytest.raises(BudgetError, match="about 100, more than the limit 5.*max_steps"):
         fm([0.0, 0.0], 0.0, 0.01, max_steps=5)

@@ -30,3 +30,40 @@ def save_figure(fig, path, dpi=110):
     finally:
         plt.close(fig)
     return path
+
+
+def check_figure_text(name, text):
+    """Raise ValueError naming ``name`` when matplotlib cannot render ``text`` (bad math text
+    such as '$\\frac{a}{$'): checked before any analysis starts."""
+    if not isinstance(text, str):
+        raise TypeError(f"{name}: must be a string, got {text!r}")
+    if "$" not in text:
+        return
+    from matplotlib.cbook import is_math_text
+    from matplotlib.mathtext import MathTextParser
+
+    if not is_math_text(text):  # an odd number of unescaped dollars: drawn as plain text
+        return
+
+    try:
+        MathTextParser("path").parse(text)
+    except ValueError as exc:
+        first = str(exc).strip().splitlines()
+        raise ValueError(f"{name}: matplotlib cannot render {text!r} "
+                         f"({first[-1] if first else 'bad math text'}); escape a literal "
+                         "dollar as \\$") from None
+
+
+def check_plot_options(path=None, flags=(), ax=None):
+    """The options every plot function shares, checked before drawing: ``path`` None or a
+    writable file path; ``flags`` (name, value) pairs that must be bools; ``ax`` None or a
+    matplotlib Axes."""
+    from nlbeam._validate import ArgumentTypeError, flag, output_file
+
+    if path is not None:
+        output_file("path", path)
+    for name, value in flags:
+        flag(name, value)
+    if ax is not None and not hasattr(ax, "figure"):
+        raise ArgumentTypeError(f"ax: must be a matplotlib Axes or None, got "
+                                f"{type(ax).__name__}")

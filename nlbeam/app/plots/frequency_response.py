@@ -36,6 +36,17 @@ def plot_frequency_response(frc, ax=None, *, scale=1e3, unit="mm", grazing=True,
     line styles, markers) stands outside the axes, right of the data (``legend=False``: none, e.g.
 for all but the last panel of a row). ``path``: also write the
     figure (then closed if this call opened it). Returns the Figure."""
+    from nlbeam._validate import positive
+
+    from .files import check_plot_options
+
+    check_plot_options(path, (("grazing", grazing), ("legend", legend)), ax)
+    positive("scale", scale)
+    if not isinstance(unit, str):
+        raise TypeError(f"unit: must be a string such as 'mm', got {unit!r}")
+    if not all(hasattr(frc, a) for a in ("branches", "bifurcations")):
+        raise TypeError(f"frc: must be a continuation.FrequencyResponse, got "
+                        f"{type(frc).__name__}")
     import matplotlib.pyplot as plt
 
     opened = ax is None

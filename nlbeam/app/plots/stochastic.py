@@ -20,8 +20,13 @@ __all__ = ["excitation_psd", "response_psd", "pdf", "time_history", "channel_psd
            "TIME_LABEL"]
 
 
-def _figure(ax, figsize=(6.4, 4.0)):
+def _figure(ax, figsize=(6.4, 4.0), path=None, flags=()):
+    """(figure, axes, opened) after the shared options are checked (path, flags, ax)."""
     import matplotlib.pyplot as plt
+
+    from .files import check_plot_options
+
+    check_plot_options(path, flags, ax)
 
     if ax is None:
         fig, ax = plt.subplots(figsize=figsize, layout="constrained")
@@ -56,9 +61,9 @@ def default_f_max(result):
 def _f_max(result, f_max):
     if f_max is None:
         return default_f_max(result)
-    if not (isinstance(f_max, (int, float)) and np.isfinite(f_max) and f_max > 0):
-        raise ValueError(f"f_max: must be a frequency > 0 Hz, got {f_max!r}")
-    return float(f_max)
+    from nlbeam._validate import positive
+
+    return positive("f_max", f_max, unit="Hz")
 
 
 def excitation_psd(result, excitation=None, *, ch="y", ax=None, path=None, log=False,
@@ -69,7 +74,7 @@ def excitation_psd(result, excitation=None, *, ch="y", ax=None, path=None, log=F
     f, P = result.psd(ch)
     lo, hi = result.psd_interval(ch)
     fmax = _f_max(result, f_max)
-    fig, ax, opened = _figure(ax)
+    fig, ax, opened = _figure(ax, path=path, flags=(("log", log),))
     ax.fill_between(f, lo, hi, color="C0", alpha=0.25, lw=0, label="95 % interval")
     ax.plot(f, P, color="C0", lw=0.8, label="realized (Welch)")
     if excitation is not None and hasattr(excitation, "psd"):
@@ -98,7 +103,7 @@ def response_psd(result, ch="delta", *, ax=None, path=None, f_max=None, referenc
     f, P = result.psd(ch)
     lo, hi = result.psd_interval(ch)
     fmax = _f_max(result, f_max)
-    fig, ax, opened = _figure(ax)
+    fig, ax, opened = _figure(ax, path=path, flags=())
     pos = (P > 0) & (f <= fmax)
     ax.fill_between(f[pos], lo[pos], hi[pos], color="C0", alpha=0.25, lw=0)
     ax.semilogy(f[pos], P[pos], color="C0", lw=0.8, label=f"{ch}")
@@ -133,7 +138,7 @@ def pdf(result, ch="delta", *, ax=None, path=None, log=False):
     c, d = result.pdf(ch)
     mo = result.moments(ch)
     _, unit, sc = channel_unit(ch, _kind(result))
-    fig, ax, opened = _figure(ax)
+    fig, ax, opened = _figure(ax, path=path, flags=(("log", log),))
     label = "measured" if result.method == "measured" else "simulated"
     ax.step(c * sc, d / sc, where="mid", color="C0", lw=1.0, label=label)
     g = np.exp(-0.5 * ((c - mo["mean"]) / mo["std"]) ** 2) / (mo["std"] * np.sqrt(2 * np.pi))
@@ -183,7 +188,7 @@ def time_history(result, channels=("y", "x"), *, ax=None, path=None):
     if len(units) > 2:
         raise ValueError(f"channels: {channels} mix {len(units)} units ({', '.join(units)}); "
                          "draw at most two units on one figure")
-    fig, ax, opened = _figure(ax, figsize=(7.5, 3.5))
+    fig, ax, opened = _figure(ax, figsize=(7.5, 3.5), path=path)
     axes = {units[0]: ax}
     if len(units) == 2:
         axes[units[1]] = ax.twinx()
@@ -207,6 +212,9 @@ def channel_psds(result, *, ax=None, path=None, f_max=None):
     (``nlbeam simulate --plot``). With ``ax`` given, all on that axis (then of one unit)."""
     import matplotlib.pyplot as plt
 
+    from .files import check_plot_options
+
+    check_plot_options(path, (), ax)
     fmax = _f_max(result, f_max)
     kind = _kind(result)
     chans = list(result.channels)

@@ -21,9 +21,9 @@ from .outputs import write_outputs
 from .plan import CACHE_DIR, entry_record, plan
 from .schema import Scene, build_model, build_noise, load_scene
 
-__all__ = ["RunReport", "run_scene", "compute", "compute_recorded", "load_result",
-           "store_result", "cached_warnings", "AnalysisWarning", "CachedResultWarning",
-           "STALE_AGE"]
+__all__ = ["RunReport", "run_scene", "check_outputs", "compute", "compute_recorded",
+           "load_result", "store_result", "cached_warnings", "AnalysisWarning",
+           "CachedResultWarning", "STALE_AGE"]
 
 STALE_AGE = 3600.0  # s: older .tmp-* files in the output and cache folders are removed
 
@@ -191,6 +191,26 @@ def _run_parallel(todo, workers, scheduler, show, quiet, name_of):
             thread.join(timeout=5.0)
 
 
+def check_outputs(scene, out_dir):
+    """Before any analysis: the output folder and its cache folder can be written (created
+    if missing), no figure or table file is a folder or a read-only file, and every figure
+    title renders (matplotlib math text). Raises ValueError naming what is wrong."""
+    from nlbeam._validate import output_file, writable_folder
+
+    from ..plots.files import check_figure_text
+
+    writable_folder("out", out_dir, create=True)
+    cache = os.path.join(out_dir, CACHE_DIR)
+    if os.path.exists(cache):
+        writable_folder("out (cache folder)", cache)
+    check_figure_text("title", scene.title)
+    for d in list(scene.figures) + list(scene.tables):
+        output_file(f"{'figure' if d in scene.figures else 'table'} {d['kind']} file",
+                    os.path.join(out_dir, d["file"]))
+        if "title" in d:
+            check_figure_text(f"figure {d['kind']} title", d["title"])
+
+
 def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, scheduler=None,
               quiet=False, log=None):
     """Validate, plan, compute what is missing (sweep points in parallel, see
@@ -204,6 +224,7 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
     jobs = plan(scene, out_dir)
     if dry_run:
         return RunReport(jobs=jobs, computed=0, wall_time=time.perf_counter() - t0)
+    check_outputs(scene, out_dir)
     for folder in (out_dir, os.path.join(out_dir, CACHE_DIR)):  # left by killed runs
         for p in remove_stale_temporaries(folder, max_age=STALE_AGE):
             log(f"nlbeam: removed a stale temporary file {p}")
