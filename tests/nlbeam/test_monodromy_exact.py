@@ -11,8 +11,8 @@ import nlbeam
 
 WN = 2 * np.pi * 20.0   # rad/s: the 1-DOF structures' natural frequency
 TOL = 1e-7              # relative, entrywise on the scaled monodromy
-CD_EPS = (2e-5, 1e-5)  # central-difference steps, relative to the state's scales (the map's
-# round-off, a few 1e-15 relative, gives 3e-10 at 1e-5; the truncation 2e-10 at 2e-5)
+CD_EPS = (4e-5, 2e-5)  # central-difference steps, relative to the state's scales: the map's
+# round-off (1e-15..1e-13 relative) gives 1e-10..4e-9 at 2e-5, the truncation ~1e-9 at 4e-5
 OFFSETS = (0.0, 0.23, 0.5, 0.81)  # t0 shifted by these fractions of a step
 
 
@@ -84,6 +84,27 @@ def central_differences(run, s, scales, eps):
     return M
 
 
+def one_sided_column(run, s, k, h, ref_scale):
+    """d run(s).state / d s_k by the second-order one-sided difference on the side where the
+    map is smooth: of the forward and the backward differences at steps h/2 and h/4, the side
+    whose two agree best (the map is piecewise smooth, and a kink lies within h on the other
+    side). Returns (column, the disagreement of its two estimates / ref_scale)."""
+    def f(a):
+        e = np.zeros(s.size)
+        e[k] = a
+        return run(s + e).state
+
+    f0 = f(0.0)
+    best = None
+    for sign in (1.0, -1.0):
+        est = [sign * (-3 * f0 + 4 * f(sign * hh) - f(2 * sign * hh)) / (2 * hh)
+               for hh in (h / 2, h / 4)]
+        spread = float(np.max(np.abs(est[0] - est[1]) / ref_scale))
+        if best is None or spread < best[1]:
+            best = (est[1], spread)
+    return best
+
+
 def scaled_error(M, ref, scales):
     """max |D^-1 (M - ref) D| / max |D^-1 ref D|, D = diag(scales)."""
     D = np.diag(scales)
@@ -92,13 +113,30 @@ def scaled_error(M, ref, scales):
     return float(np.max(np.abs(A - B)) / np.max(np.abs(B)))
 
 
-def _check_flow(model, ex, t0, s0, scales, duration, **kw):
+def _check_flow(model, ex, t0, s0, scales, duration, cd_scales=None, **kw):
+    """(flow with monodromy, its error against differences of the same map, how many columns
+    needed one-sided differences). The map is piecewise smooth: where a step count or the
+    branch of a min() changes within the difference step, the central differences at two steps
+    disagree; that column is then taken by one-sided differences on the smooth side. Asserts
+    that the differences agree with themselves to well below TOL."""
     def run(s, mono=False):
         return nlbeam.flow(model, ex, s, t0, duration, monodromy=mono, warn=False, **kw)
 
+    cd_scales = scales if cd_scales is None else cd_scales
     fl = run(s0, True)
-    M1, M2 = (central_differences(run, s0, scales, eps) for eps in CD_EPS)
-    return fl, scaled_error(M1, M2, scales), scaled_error(fl.monodromy, M1, scales)
+    M1, M2 = (central_differences(run, s0, cd_scales, eps) for eps in CD_EPS)
+    D = np.diag(scales)
+    ref = np.max(np.abs(np.linalg.solve(D, M2 @ D)))   # the scaled monodromy's size
+    kinks = 0
+    for k in range(s0.size):
+        spread = np.max(np.abs(M1[:, k] - M2[:, k]) / scales) * scales[k] / ref
+        if spread > 0.2 * TOL:
+            kinks += 1
+            col, spread = one_sided_column(run, s0, k, CD_EPS[0] * cd_scales[k],
+                                           ref / scales[k] * scales)
+            M2[:, k] = col
+        assert spread < 0.2 * TOL, (k, spread)
+    return fl, scaled_error(fl.monodromy, M2, scales), kinks
 
 
 @pytest.mark.parametrize("method,graded", METHODS,
@@ -108,49 +146,53 @@ def test_monodromy_is_the_derivative_of_the_fixed_step_map(name, method, graded)
     model, ex, t_start, s0, scales = _orbit_start(name)
     T = 1.0 / ex.frequency
     dt = T / (100 if method == "rk4" else 400)
-    errs = []
+    errs, kinks = [], 0
     for off in OFFSETS:
-        fl, cd_err, err = _check_flow(model, ex, t_start + off * dt, s0, scales, T,
-                                      method=method, dt=dt, graded=graded)
+        fl, err, n_kinks = _check_flow(model, ex, t_start + off * dt, s0, scales, T,
+                                       method=method, dt=dt, graded=graded)
         # the flow holds whole contacts: it starts and ends out of contact
         assert fl.n_impacts >= 1 and not np.any(fl.disc[:, 0])
-        # the two difference steps agree: the differencing error is far below TOL
-        assert cd_err < 0.05 * TOL, (off, cd_err)
         errs.append(err)
+        kinks += n_kinks
     assert max(errs) < TOL, errs
+    assert kinks <= s0.size   # central differences apply nearly everywhere
 
 
 @pytest.mark.parametrize("name", ["hertz", "lankarani-nikravesh", "pwl-zero-gap-force"])
 def test_monodromy_from_inside_a_contact(name):
     # a flow that starts inside a contact: the contact step then follows from the state at the
-    # start; with the onset velocity held (disc0), its own sensitivity column too
+    # start; the onset velocity is held (disc0), with its own sensitivity column
     model, ex, t_start, s0, scales = _orbit_start(name)
     T = 1.0 / ex.frequency
     tr = nlbeam.integrate(model, ex, t_start + T, t0=t_start, x0=s0, dt=T / 400)
     k = int(np.argmax(tr.delta[:, 0]))
     k = k + (int(np.argmax(tr.delta[k:, 0] < 0.5 * tr.delta[k, 0])) // 2)
-    t0, s_in = float(tr.t[k]), np.r_[tr.x[k], tr.v[k]]
     assert tr.delta[k, 0] > 0
+    t0 = float(tr.t[k])
     for off in OFFSETS[:2]:
-        fl, cd_err, err = _check_flow(model, ex, t0 + off * T / 100, s_in, scales, T,
-                                      dt=T / 100)
-        assert fl.n_impacts >= 1 and cd_err < 0.05 * TOL and err < TOL, (off, cd_err, err)
-    if name != "lankarani-nikravesh":
-        return
-    # the onset velocity held at the start (disc0) and its sensitivity column
-    disc0 = fl.disc.copy()
-    disc0[0] = [1.0, 0.3]
+        t1 = t0 + off * T / 100
+        inside = nlbeam.flow(model, ex, s0, t_start, t1 - t_start, dt=T / 400)
+        assert inside.disc[0, 0] == 1.0
+        # differences in x of the order of the penetration (the map is far from linear in
+        # the penetration on the scale of the orbit's amplitude)
+        cd_scales = np.array([tr.delta[k, 0], scales[1]])
+        fl, err, _ = _check_flow(model, ex, t1, inside.state, scales, T, cd_scales, dt=T / 100,
+                                 disc0=inside.disc)
+        assert fl.n_impacts >= 1 and err < TOL, (off, err)
+        if name != "lankarani-nikravesh":
+            continue
+        vm = inside.disc[0, 1]
 
-    def run(v):
-        d = disc0.copy()
-        d[0, 1] = v
-        return nlbeam.flow(model, ex, s_in, t0, T, disc0=d, dt=T / 100, monodromy=True)
+        def run(v):
+            d = inside.disc.copy()
+            d[0, 1] = v
+            return nlbeam.flow(model, ex, inside.state, t1, T, disc0=d, dt=T / 100)
 
-    fl = run(0.3)
-    dv = 1e-5 * 0.3
-    fd = (run(0.3 + dv).state - run(0.3 - dv).state) / (2 * dv)
-    assert np.max(np.abs(fl.dstate_dvminus0[:, 0] - fd) / scales) < TOL * np.max(
-        np.abs(fd) / scales)
+        fd = [(run(vm * (1 + eps)).state - run(vm * (1 - eps)).state) / (2 * eps * vm)
+              for eps in CD_EPS]
+        assert np.max(np.abs(fd[0] - fd[1]) / scales) < 0.1 * TOL * np.max(np.abs(fd[1]) / scales)
+        assert np.max(np.abs(fl.dstate_dvminus0[:, 0] - fd[1]) / scales) < TOL * np.max(
+            np.abs(fd[1]) / scales)
 
 
 def test_monodromy_where_the_contact_law_limits_the_step():
@@ -159,6 +201,6 @@ def test_monodromy_where_the_contact_law_limits_the_step():
     model, ex, t_start, s0, scales = _orbit_start("hertz")
     T = 1.0 / ex.frequency
     for off in OFFSETS:
-        fl, cd_err, err = _check_flow(model, ex, t_start + off * T / 100, s0, scales, T,
-                                      dt=T / 100, steps_per_contact=6, graded=False)
-        assert cd_err < 0.05 * TOL and err < TOL, (off, cd_err, err)
+        fl, err, _ = _check_flow(model, ex, t_start + off * T / 100, s0, scales, T,
+                                 dt=T / 100, steps_per_contact=6, graded=False)
+        assert err < TOL, (off, err)
