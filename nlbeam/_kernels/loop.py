@@ -184,6 +184,8 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
     g_u = 0.0
     g_end = 0.0
     g_h = 0.0
+    t_dep = False   # with want_var: d t / d z (SR[SR_T]) may be nonzero
+    sens_step = False
 
     st = deriv(t, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0, KP[0], fel)
     n_rhs += 1
@@ -209,6 +211,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
         tau_ev = 0.0
         hit_grid = False
         enter_exit = False
+        sens_step = False   # the step's sensitivities of its end time are in SR[SR_TN]
         if phase == 2:
             y, yd, ydd, st = excite(t, xc, xp, xtab)
             d, dd = kinematics(pe, s, y, yd, sysa)
@@ -244,9 +247,10 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                         SR[SR_H, c] = SR[SR_GH, c]
                     else:
                         SR[SR_H, c] = SR[SR_GEND, c] - SR[SR_U0, c]
-                st, t_new = rk_step_sens(meth, 1, g_u, hs, g_t0, pe, s, t, P, dvm, disc, sysa, xc,
+                st, t_new = rk_step_sens(meth, phase, g_u, hs, g_t0, pe, s, t, P, dvm, disc, sysa, xc,
                                          xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel, ft,
                                          err_w, SR, SR_T)
+                sens_step = True
             else:
                 st, t_new = rk_step_graded(meth, 1, g_u, hs, g_t0, pe, s, t, P, dvm, disc, False,
                                            sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp,
@@ -286,9 +290,10 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                 # the step -g_h, or the rest -g_u down to u = 0
                 for c in range(m):
                     SR[SR_H, c] = -SR[SR_U0, c] if hu == g_u else -SR[SR_GH, c]
-                st, t_new = rk_step_sens(meth, 2, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, sysa,
+                st, t_new = rk_step_sens(meth, phase, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, sysa,
                                          xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel,
                                          ft, err_w, SR, SR_T)
+                sens_step = True
             else:
                 st, t_new = rk_step_graded(meth, 2, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, False,
                                            sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp,
@@ -395,31 +400,32 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                 else:
                     h = tg - t
                     hit_grid = True
-                    if want_var:
+                    if want_var and t_dep:
                         for c in range(m):
-                            SR[SR_H, c] = -SR[SR_T, c]
-            else:
+                            SR[SR_H, c] = -SR[SR_T, c]   # onto the grid: t fixed at the end
+            elif want_var and t_dep:
+                # the controller's steps taken as given, the last one ending at t_end
+                hh = -1.0 if h >= t_end - t else 0.0
+                for c in range(m):
+                    SR[SR_H, c] = hh * SR[SR_T, c]
+            if not fixed:
                 if h >= t_end - t:
                     h = t_end - t
-                    if want_var:
-                        for c in range(m):
-                            SR[SR_H, c] = -SR[SR_T, c]
-                elif want_var:
-                    for c in range(m):
-                        SR[SR_H, c] = 0.0   # the controller's steps: taken as given
                 if h < 1e-14 * max(abs(t), 1.0):
                     status = ERR_STEP_UNDERFLOW
                     break
-            moving = False   # the step's start or length depends on the state
-            if want_var:
-                for c in range(m):
-                    SR[SR_TN, c] = 0.0
-                    if SR[SR_T, c] != 0.0 or SR[SR_H, c] != 0.0:
-                        moving = True
+            # with the variational equations: a step whose start or length depends on the state
+            # (after an event, inside a contact) carries those sensitivities (rk_step_sens); in
+            # free flight from a grid point neither does, and the plain variational step serves
+            moving = want_var and (t_dep or n_in > 0 and fixed)
+            sens_step = moving
             if moving:
-                st, t_dum = rk_step_sens(meth, 0, 0.0, h, 0.0, -1, s, t, P, dvm, disc, sysa, xc,
-                                         xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel, ft,
-                                         err_w, SR, SR_T)
+                # mode = phase (0 here) and e = pe, as at the graded steps' calls: the three
+                # calls share one compiled rk_step_sens (with literal modes numba compiled one
+                # per call, and every step of this loop, free flight too, cost ~20 % more)
+                st, t_dum = rk_step_sens(meth, phase, 0.0, h, 0.0, pe, s, t, P, dvm, disc, sysa,
+                                         xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel,
+                                         ft, err_w, SR, SR_T)
             elif not want_var and meth != RK2:
                 # without variational equations: straight to the unrolled RK4/DP5 step (what
                 # rk_step would call), one call level less per step
@@ -508,9 +514,13 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                 if want_var:
                     for c in range(m):
                         SR[SR_H, c] = 0.0
+                if want_var and not t_dep:
+                    for c in range(m):
+                        SR[SR_T, c] = 0.0
                 st = var_time_step(meth, t, tau_ev, s, P, dvm, disc, want_var, sysa, xc, xp, xtab,
                                    f0, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel, err_w, ft, SR,
                                    SR_T)
+                sens_step = True
                 if st != 0:
                     status = st
                     break
@@ -598,8 +608,11 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
             for q in range(n):
                 for c in range(m):
                     P[q, c] = P_new[q, c]
-            for c in range(m):
-                SR[SR_T, c] = SR[SR_TN, c]
+            if sens_step:
+                for c in range(m):
+                    SR[SR_T, c] = SR[SR_TN, c]
+                # a step onto the grid point: the time no longer depends on the state
+                t_dep = not (fixed and hit_grid and n_in == 0)
         if enter_exit:
             phase = 2
             g_u = math.sqrt(d_sw[pe])

@@ -35,22 +35,6 @@ SE_DSW = 2    # d / d z of the penetration where its graded exit phase starts
 SE_ROWS = 3
 
 
-@njit(cache=True)
-def rk_step_sens(meth, mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, sysa, xc, xp, xtab,
-                 s_out, P_out, KS, KP, KT, ytmp, Ptmp, fel, ft, err_w, SR, row_t):
-    """One Runge-Kutta step with the variational equations and the sensitivities of the step's
-    own parameters (``_rk_step_sens_loops``), RK4 unrolled with the field inlined."""
-    if not _HAS_USER and meth == RK4:
-        if mode == 0:
-            return _rk4_time_sens(tcur, hu, s, P, dvm, disc, sysa, xc, xp, xtab, s_out, P_out,
-                                  KS, KP, ytmp, Ptmp, fel, SR, row_t)
-        return _rk4_graded_sens(mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, sysa, xc, xp,
-                                xtab, s_out, P_out, KS, KP, KT, ytmp, Ptmp, fel, SR, row_t)
-    return _rk_step_sens_loops(meth, mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, sysa, xc,
-                               xp, xtab, s_out, P_out, KS, KP, KT, ytmp, Ptmp, fel, ft, err_w,
-                               SR, row_t)
-
-
 @njit(cache=True, inline="always")
 def _stage_sens(s, P, h, a, KSj, KPj, Hrow, ytmp, Ptmp):
     """An RK4 stage's state and sensitivities where the step h depends on the state:
@@ -59,8 +43,11 @@ def _stage_sens(s, P, h, a, KSj, KPj, Hrow, ytmp, Ptmp):
     m = P.shape[1]
     for q in range(n):
         ytmp[q] = s[q] + h * a * KSj[q]
+    ha = h * a
+    for q in range(n):
+        ak = a * KSj[q]
         for c in range(m):
-            Ptmp[q, c] = P[q, c] + h * a * KPj[q, c] + a * KSj[q] * Hrow[c]
+            Ptmp[q, c] = P[q, c] + ha * KPj[q, c] + ak * Hrow[c]
 
 
 @njit(cache=True, inline="always")
@@ -77,6 +64,7 @@ def _rk4_end_sens(s, P, h, KS, KP, Hrow, s_out, P_out):
         s_out[q] = acc
         if not math.isfinite(acc):
             return ERR_NONFINITE
+    for q in range(n):
         kb = _R6 * KS[0, q] + _R3 * KS[1, q] + _R3 * KS[2, q] + _R6 * KS[3, q]
         for c in range(m):
             acc = P[q, c] + h * _R6 * KP[0, q, c]
@@ -260,8 +248,8 @@ def _rk4_graded_sens(mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, sysa, xc, xp
 
 
 @njit(cache=True)
-def _rk_step_sens_loops(meth, mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, sysa, xc, xp, xtab,
-                        s_out, P_out, KS, KP, KT, ytmp, Ptmp, fel, ft, err_w, SR, row_t):
+def rk_step_sens(meth, mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, sysa, xc, xp, xtab,
+                 s_out, P_out, KS, KP, KT, ytmp, Ptmp, fel, ft, err_w, SR, row_t):
     """One Runge-Kutta step with the variational equations and the sensitivities of the step's
     own parameters: the derivative of the step map as computed, where the start time, the step
     and the graded variables depend on the state.
@@ -271,6 +259,13 @@ def _rk_step_sens_loops(meth, mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, sys
     Rows of SR read: row_t (d tcur), SR_H (d hu), SR_U0 (d u0; modes 1, 2), SR_TREF (d t_ref;
     mode 1); written: SR_TN (d t at the step's end; may be row_t). For DP5 err_w gets the
     embedded error. Returns (status, t at the step's end)."""
+    if not _HAS_USER and meth == RK4:
+        # RK4 unrolled, the field inlined (with a custom force these are pruned)
+        if mode == 0:
+            return _rk4_time_sens(tcur, hu, s, P, dvm, disc, sysa, xc, xp, xtab, s_out, P_out,
+                                  KS, KP, ytmp, Ptmp, fel, SR, row_t)
+        return _rk4_graded_sens(mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, sysa, xc, xp,
+                                xtab, s_out, P_out, KS, KP, KT, ytmp, Ptmp, fel, SR, row_t)
     A, B, BH, Cc = tableau(meth)
     ns = B.shape[0]
     n = s.shape[0]
