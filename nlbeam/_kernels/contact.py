@@ -82,7 +82,8 @@ def contact_rate_sens(t, s, P, dvm, disc, Trow, sysa, xc, xp, xtab, out):
     for e in range(etype.shape[0]):
         if disc[e, 0] != 0.0:
             d, dd = kinematics(e, s, y, yd, sysa)
-            f, dfd, dfdd, dfdv = element_force(etype[e], sysa.epar[e], d, dd, disc[e, 1], disc[e, 0])
+            f, dfd, dfdd, dfdv = element_force(etype[e], sysa.epar[e], d, dd, disc[e, 1],
+                                               disc[e, 0])
             winv = 0.0
             for j in range(N):
                 winv += ew[e, j] * sysa.mw[e, j]

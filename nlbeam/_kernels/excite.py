@@ -104,7 +104,8 @@ def excite_jerk(t, code, p, tab):
         if st != 0 or math.isnan(tab[i, 2]):
             return 0.0
         return ((12.0 * th - 6.0) / (h * h) * tab[i, 1] + (6.0 * th - 4.0) / h * tab[i, 2]
-                + (6.0 - 12.0 * th) / (h * h) * tab[i + 1, 1] + (6.0 * th - 2.0) / h * tab[i + 1, 2])
+                + (6.0 - 12.0 * th) / (h * h) * tab[i + 1, 1]
+                + (6.0 * th - 2.0) / h * tab[i + 1, 2])
     y3 = 0.0
     for k in range(tab.shape[0]):
         w = tab[k, 0]

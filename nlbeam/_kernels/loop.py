@@ -247,9 +247,9 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                         SR[SR_H, c] = SR[SR_GH, c]
                     else:
                         SR[SR_H, c] = SR[SR_GEND, c] - SR[SR_U0, c]
-                st, t_new = rk_step_sens(meth, phase, g_u, hs, g_t0, pe, s, t, P, dvm, disc, sysa, xc,
-                                         xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel, ft,
-                                         err_w, SR, SR_T)
+                st, t_new = rk_step_sens(meth, phase, g_u, hs, g_t0, pe, s, t, P, dvm, disc,
+                                         sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp,
+                                         Ptmp, fel, ft, err_w, SR, SR_T)
                 sens_step = True
             else:
                 st, t_new = rk_step_graded(meth, 1, g_u, hs, g_t0, pe, s, t, P, dvm, disc, False,

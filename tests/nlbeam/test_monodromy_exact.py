@@ -204,3 +204,39 @@ def test_monodromy_where_the_contact_law_limits_the_step():
         fl, err, _ = _check_flow(model, ex, t_start + off * T / 100, s0, scales, T,
                                  dt=T / 100, steps_per_contact=6, graded=False)
         assert err < TOL, (off, err)
+
+
+def test_onset_velocity_sensitivities_against_differences():
+    # the flows whose sensitivities test_integrate once pinned to main's numbers (then the
+    # derivative of the continuous flow, not of the map): against central differences of the
+    # map; the second starts inside a contact with its onset velocity held in disc0
+    model, ex = SYSTEMS["lankarani-nikravesh"]
+    sc = np.array([1e-4, 2 * np.pi * 40.0 * 1e-4])
+
+    def run(s, disc0=None, mono=False):
+        return nlbeam.flow(model, ex, s, 0.0, 0.025, disc0=disc0, monodromy=mono, warn=False)
+
+    for s0, disc0 in (([0.0, 0.0], None), ([1.03e-4, 0.02], np.array([[1.0, 0.02]]))):
+        s0 = np.array(s0)
+        fl = run(s0, disc0, True)
+        assert fl.n_impacts >= 1
+        M = np.empty((2, 2))
+        dv = np.empty((1, 2))
+        for k in range(2):
+            e = np.zeros(2)
+            e[k] = 1e-6 * sc[k]
+            hi, lo = run(s0 + e, disc0), run(s0 - e, disc0)
+            M[:, k] = (hi.state - lo.state) / (2 * e[k])
+            dv[0, k] = (hi.disc[0, 1] - lo.disc[0, 1]) / (2 * e[k])
+        assert scaled_error(fl.monodromy, M, sc) < TOL
+        np.testing.assert_allclose(fl.dvminus_dstate0 * sc, dv * sc, rtol=0,
+                                   atol=TOL * np.max(np.abs(dv * sc)))
+        if disc0 is None:
+            continue
+        h = 1e-6 * disc0[0, 1]
+        hi, lo = (run(s0, disc0 + [[0.0, a]]) for a in (h, -h))
+        ds = (hi.state - lo.state) / (2 * h)
+        np.testing.assert_allclose(fl.dstate_dvminus0[:, 0] / sc, ds / sc, rtol=0,
+                                   atol=TOL * np.max(np.abs(ds / sc)))
+        dvv = (hi.disc[0, 1] - lo.disc[0, 1]) / (2 * h)
+        assert abs(fl.dvminus_dvminus0[0, 0] - dvv) < TOL * abs(dvv) + 1e-12
