@@ -37,7 +37,10 @@ class Branch(Summary):
     frequency_response), 'step underflow' (the corrector failed at every step size down to
     ds_min: a non-smooth or too unstable map), 'no progress', 'max_points', 'could not move
     the segment boundaries'; '' unknown). The last five are ends where the tracer gave up:
-    the diagram's ContinuationWarning lists them.
+    the diagram's ContinuationWarning lists them. 'discontinuous map': the fixed-step flow map
+    jumps just beyond the last point (continuation.corners.map_jump; e.g. a contact that ends
+    and restarts within a step): no continuous branch of the discrete map goes on; listed in
+    that warning too, with the interval it leaves uncovered.
     Accuracy (continuation.accuracy.branch_errors): xmax_error (n,) m and multipliers_error
     (n,) (the largest over each point's multipliers; None without stability) estimate the
     integration's error, computed at the points where error_sampled (n,) is True (every 10th,
@@ -645,6 +648,7 @@ def _warn_hidden(dropped, branches, orders, n_grid, p_range):
 _EARLY_ENDS = ("step underflow", "max_points", "could not move the segment boundaries",
                "stuck at a corner")
 _GAVE_UP = _EARLY_ENDS + ("no progress",)  # ends where the tracer gave up (the orbit goes on)
+_JUMP = "discontinuous map"  # ends where the fixed-step map jumps: no continuous branch goes on
 
 
 def _intervals(branches):
@@ -707,7 +711,7 @@ def _coverage(branches, p_range, orders):
     early = []
     for i, b in enumerate(branches):
         for reason, v in ((b.ends[0], b.values[0]), (b.ends[1], b.values[-1])):
-            if reason in _GAVE_UP and lo < v < hi:
+            if (reason in _GAVE_UP or reason == _JUMP) and lo < v < hi:
                 early.append(f"branch {i + 1} (order {b.order}) at {v:.6g} ({reason})")
     gaps = []
     for order in orders:
@@ -715,9 +719,13 @@ def _coverage(branches, p_range, orders):
         for a, c in _uncovered(_intervals(bs), lo, hi):
             ends = [(r, v) for b in bs for r, v in ((b.ends[0], b.values[0]),
                                                     (b.ends[1], b.values[-1]))
-                    if r in _GAVE_UP and min(abs(v - a), abs(v - c)) <= 1e-9 * (hi - lo)]
+                    if (r in _GAVE_UP or r == _JUMP)
+                    and min(abs(v - a), abs(v - c)) <= 1e-9 * (hi - lo)]
             if order == 1 or ends:
-                why = (f"next to a branch end where the tracer gave up ({ends[0][0]})" if ends
+                jumps = [v for r, v in ends if r == _JUMP]
+                why = ("bounded by a discontinuity of the fixed-step flow map at "
+                       + ", ".join(f"{v:.9g}" for v in jumps) if jumps else
+                       f"next to a branch end where the tracer gave up ({ends[0][0]})" if ends
                        else "no branch" if not bs else "no branch reaches it")
                 gaps.append((order, a, c, why))
     return gaps, early
@@ -736,9 +744,16 @@ def _warn_coverage(branches, p_range, orders, parameter, unit, what_to_try):
     if gaps:
         parts.append("not covered: " + "; ".join(
             f"order {o}: {a:.6g}-{c:.6g}{unit} ({why})" for o, a, c, why in gaps))
+    jumps = [e for e in early if e.endswith(f"({_JUMP})")]
+    early = [e for e in early if e not in jumps]
     if early:
         parts.append(f"{len(early)} branch end(s) inside the range where the tracer gave up: "
                      + "; ".join(early))
+    if jumps:
+        parts.append(f"{len(jumps)} branch end(s) at a discontinuity of the fixed-step flow "
+                     "map (a contact that ends and restarts within a step, or the "
+                     "Lankarani-Nikravesh onset-velocity memory reset: no continuous branch "
+                     "of the discrete map goes on there): " + "; ".join(jumps))
     if parts:
         warnings.warn(
             f"continuation: the {parameter} range is not fully covered: " + ". ".join(parts)
