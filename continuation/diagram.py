@@ -420,6 +420,20 @@ def _overlap_stop(branches, order, skip=0):
     return stop
 
 
+def _traced_already(branches, pts, order):
+    """True when every point of ``pts`` (a traced stretch of this order) lies on one branch
+    traced before (``_on_branch``)."""
+    hits = set()
+    for q in pts:
+        m_, A_, f = q.problem.setup(q.p)
+        bi = _on_branch(branches, order, f, q.xmax,
+                        lambda q=q: _shifted_states(q.problem, q.u, q.p))
+        if bi is None:
+            return False
+        hits.add(bi)
+    return len(hits) == 1
+
+
 def _shifted_states(prob, u, p):
     """States at t = k / f, k = 0..order-1, of the orbit u of prob (rows)."""
     s0, d0 = prob.state_at_zero(u, p)
@@ -600,8 +614,13 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                 if res is None:
                     continue
                 pts, loc, ends = res
-                add(pts, loc, 2 * order, "period-doubling", ends)
                 end = pts[-1]
+                if ends[1] == "stop" and _traced_already(branches, pts, 2 * order):
+                    # the switched branch runs along one traced before (from the period
+                    # doubling at its other end, whose end stopped short of this one by
+                    # round-off): not a branch of its own
+                    continue
+                add(pts, loc, 2 * order, "period-doubling", ends)
                 for k2, (pt2, o2, bi2) in enumerate(pd_points):
                     if o2 == order and k2 not in handled and \
                             abs(pt2.p - end.p) < 1e-3 * abs(end.p) + 1e-12:
