@@ -401,10 +401,11 @@ def map_jump(prob, z, t, hs=(1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4), min_jump=1e-5)
     branch |R| grows like h^2 (like h where t is only approximate); across a jump it is at
     least ``min_jump`` and 100 h at the first h past the jump and stays within a factor 1.5
     of that at the next h, ten times further (it does not grow with h; at a grazing point of
-    a stiff contact the map is steep but continuous: |R| grows like sqrt(h) or faster). Returns (h, |R| there) of the first such
-    h, or None. (The fixed-step flow map jumps without a change of the number of impacts
-    where, e.g., a contact ends and restarts within a step, or its penetration dips to zero
-    and the Lankarani-Nikravesh onset-velocity memory resets: no step length passes it.)"""
+    a stiff contact the map is steep but continuous: |R| grows like sqrt(h) or faster).
+    Returns (h, |R| there) of the first such h, or None. (The fixed-step flow map jumps
+    without a change of the number of impacts where, e.g., a contact ends and restarts
+    within a step, or its penetration dips to zero and the Lankarani-Nikravesh
+    onset-velocity memory resets: no step length passes it.)"""
     w, wp = prob.scale_u, prob.scale_p
     res = []
     for h in hs:
