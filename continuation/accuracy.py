@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import nlbeam
 from nlbeam.parameters import with_parameter
 
 from ._newton import ConvergenceError
@@ -443,13 +444,31 @@ def _branch_problem(model, branch, i, integrator):
     if branch.parameter not in ("frequency", "amplitude"):
         m0 = with_parameter(model, branch.parameter, p)
     seg = ~np.isnan(branch.boundaries[i])  # (NaN: fewer segments at this point than others)
-    prob = ShootingProblem(model, A, f, branch.order, branch.boundaries[i][seg], integrator,
-                           parameter=branch.parameter,
-                           steps_per_period=integrator.steps_per_period(m0, f),
-                           variational=branch.multipliers is not None)
     u = np.asarray(branch.states[i][seg], dtype=float).ravel()
-    prob.scale_u = prob.make_scale(u, p)
-    return prob, u, p
+    spp0 = integrator.steps_per_period(m0, f)
+    # a branch keeps its steps per period over a stretch (the discrete map stays smooth), so
+    # near a frequency where the default count doubles a point may hold half or twice it: the
+    # count whose orbit the stored states are (smallest residual) is the one estimated
+    best = None
+    for spp in ((spp0, spp0 // 2, 2 * spp0) if spp0 else (spp0,)):
+        if spp0 and spp < 1:
+            continue
+        prob = ShootingProblem(model, A, f, branch.order, branch.boundaries[i][seg], integrator,
+                               parameter=branch.parameter, steps_per_period=spp,
+                               variational=branch.multipliers is not None)
+        prob.scale_u = prob.make_scale(u, p)
+        try:
+            r = float(np.max(np.abs(prob.evaluate(u, p, jac=False, jac_p=False).R
+                                    / prob.scale_u)))
+        except nlbeam.IntegrationError:
+            continue
+        if best is None or r < best[0]:
+            best = (r, prob)
+        if r < 1e-9:
+            break
+    if best is None:
+        raise ConvergenceError(f"branch point {i}: its orbit could not be integrated")
+    return best[1], u, p
 
 
 def sample_indices(n, every):

@@ -393,3 +393,30 @@ class Retrace:
                 if np.any(f_):
                     return "retrace", -1
         return None
+
+
+def map_jump(prob, z, t, hs=(1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4), min_jump=1e-5):
+    """Is the map R discontinuous just ahead of the solution z (scaled, R(z) = 0) along the
+    unit tangent t? R is evaluated at z + h t for the scaled distances ``hs``: along a smooth
+    branch |R| grows like h^2 (like h where t is only approximate); across a jump it is at
+    least ``min_jump`` and 100 h at the first h past the jump and stays within a factor 1.5
+    of that at the next h, ten times further (it does not grow with h; at a grazing point of
+    a stiff contact the map is steep but continuous: |R| grows like sqrt(h) or faster).
+    Returns (h, |R| there) of the first such h, or None. (The fixed-step flow map jumps
+    without a change of the number of impacts where, e.g., a contact ends and restarts
+    within a step, or its penetration dips to zero and the Lankarani-Nikravesh
+    onset-velocity memory resets: no step length passes it.)"""
+    w, wp = prob.scale_u, prob.scale_p
+    res = []
+    for h in hs:
+        zh = z + h * t
+        try:
+            ev = prob.evaluate(zh[:-1] * w, zh[-1] * wp, jac=False, jac_p=False)
+            res.append(float(np.max(np.abs(ev.R / w))))
+        except ConvergenceError:
+            res.append(np.inf)
+    for k in range(len(hs) - 1):
+        r, r2 = res[k], res[k + 1]
+        if np.isfinite(r) and r >= max(min_jump, 100 * hs[k]) and r2 <= 1.5 * r:
+            return hs[k], r
+    return None

@@ -39,7 +39,10 @@ class Branch(Summary):
     frequency_response), 'step underflow' (the corrector failed at every step size down to
     ds_min: a non-smooth or too unstable map), 'no progress', 'max_points', 'could not move
     the segment boundaries'; '' unknown). The last five are ends where the tracer gave up:
-    the diagram's ContinuationWarning lists them.
+    the diagram's ContinuationWarning lists them. 'discontinuous map': the fixed-step flow map
+    jumps just beyond the last point (continuation.corners.map_jump; e.g. a contact that ends
+    and restarts within a step): no continuous branch of the discrete map goes on; listed in
+    that warning too, with the interval it leaves uncovered.
     Accuracy (continuation.accuracy.branch_errors): xmax_error (n,) m and multipliers_error
     (n,) (the largest over each point's multipliers; None without stability) estimate the
     integration's error, computed at the points where error_sampled (n,) is True (every 10th,
@@ -420,6 +423,20 @@ def _overlap_stop(branches, order, skip=0):
     return stop
 
 
+def _traced_already(branches, pts, order):
+    """True when every point of ``pts`` (a traced stretch of this order) lies on one branch
+    traced before (``_on_branch``)."""
+    hits = set()
+    for q in pts:
+        m_, A_, f = q.problem.setup(q.p)
+        bi = _on_branch(branches, order, f, q.xmax,
+                        lambda q=q: _shifted_states(q.problem, q.u, q.p))
+        if bi is None:
+            return False
+        hits.add(bi)
+    return len(hits) == 1
+
+
 def _shifted_states(prob, u, p):
     """States at t = k / f, k = 0..order-1, of the orbit u of prob (rows)."""
     s0, d0 = prob.state_at_zero(u, p)
@@ -600,8 +617,13 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                 if res is None:
                     continue
                 pts, loc, ends = res
-                add(pts, loc, 2 * order, "period-doubling", ends)
                 end = pts[-1]
+                if ends[1] == "stop" and _traced_already(branches, pts, 2 * order):
+                    # the switched branch runs along one traced before (from the period
+                    # doubling at its other end, whose end stopped short of this one by
+                    # round-off): not a branch of its own
+                    continue
+                add(pts, loc, 2 * order, "period-doubling", ends)
                 for k2, (pt2, o2, bi2) in enumerate(pd_points):
                     if o2 == order and k2 not in handled and \
                             abs(pt2.p - end.p) < 1e-3 * abs(end.p) + 1e-12:
@@ -648,6 +670,7 @@ def _warn_hidden(dropped, branches, orders, n_grid, p_range):
 _EARLY_ENDS = ("step underflow", "max_points", "could not move the segment boundaries",
                "stuck at a corner")
 _GAVE_UP = _EARLY_ENDS + ("no progress",)  # ends where the tracer gave up (the orbit goes on)
+_JUMP = "discontinuous map"  # ends where the fixed-step map jumps: no continuous branch goes on
 
 
 def _intervals(branches):
@@ -710,7 +733,7 @@ def _coverage(branches, p_range, orders):
     early = []
     for i, b in enumerate(branches):
         for reason, v in ((b.ends[0], b.values[0]), (b.ends[1], b.values[-1])):
-            if reason in _GAVE_UP and lo < v < hi:
+            if (reason in _GAVE_UP or reason == _JUMP) and lo < v < hi:
                 early.append(f"branch {i + 1} (order {b.order}) at {v:.6g} ({reason})")
     gaps = []
     for order in orders:
@@ -718,9 +741,13 @@ def _coverage(branches, p_range, orders):
         for a, c in _uncovered(_intervals(bs), lo, hi):
             ends = [(r, v) for b in bs for r, v in ((b.ends[0], b.values[0]),
                                                     (b.ends[1], b.values[-1]))
-                    if r in _GAVE_UP and min(abs(v - a), abs(v - c)) <= 1e-9 * (hi - lo)]
+                    if (r in _GAVE_UP or r == _JUMP)
+                    and min(abs(v - a), abs(v - c)) <= 1e-9 * (hi - lo)]
             if order == 1 or ends:
-                why = (f"next to a branch end where the tracer gave up ({ends[0][0]})" if ends
+                jumps = [v for r, v in ends if r == _JUMP]
+                why = ("bounded by a discontinuity of the fixed-step flow map at "
+                       + ", ".join(f"{v:.9g}" for v in jumps) if jumps else
+                       f"next to a branch end where the tracer gave up ({ends[0][0]})" if ends
                        else "no branch" if not bs else "no branch reaches it")
                 gaps.append((order, a, c, why))
     return gaps, early
@@ -739,9 +766,16 @@ def _warn_coverage(branches, p_range, orders, parameter, unit, what_to_try):
     if gaps:
         parts.append("not covered: " + "; ".join(
             f"order {o}: {a:.6g}-{c:.6g}{unit} ({why})" for o, a, c, why in gaps))
+    jumps = [e for e in early if e.endswith(f"({_JUMP})")]
+    early = [e for e in early if e not in jumps]
     if early:
         parts.append(f"{len(early)} branch end(s) inside the range where the tracer gave up: "
                      + "; ".join(early))
+    if jumps:
+        parts.append(f"{len(jumps)} branch end(s) at a discontinuity of the fixed-step flow "
+                     "map (a contact that ends and restarts within a step, or the "
+                     "Lankarani-Nikravesh onset-velocity memory reset: no continuous branch "
+                     "of the discrete map goes on there): " + "; ".join(jumps))
     if parts:
         warnings.warn(
             f"continuation: the {parameter} range is not fully covered: " + ". ".join(parts)

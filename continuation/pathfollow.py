@@ -11,7 +11,7 @@ from typing import Protocol
 import numpy as np
 
 from ._newton import ContinuationWarning, ConvergenceError
-from .corners import Retrace, check_crossing, far_side, tangent
+from .corners import Retrace, check_crossing, far_side, map_jump, tangent
 
 KINDS = ("fold", "period-doubling", "neimark-sacker")  # from the test functions
 
@@ -390,6 +390,27 @@ class Tracer:
             " steps_per_contact=64), multiple shooting from the start (segments=4), or a start "
             "beyond the corner (starts=...)", ContinuationWarning, stacklevel=3)
 
+    def _jump_end(self, prob, pt, z, t, reason):
+        """The end reason of a branch whose steps failed at the point pt (z scaled, direction
+        of travel t): 'discontinuous map', with a ContinuationWarning naming the parameter
+        value, where the map jumps just ahead (``corners.map_jump``), else ``reason``."""
+        jump = map_jump(prob, z, t)
+        self.n_evaluations += 6
+        if jump is None:
+            return reason
+        h, r = jump
+        warnings.warn(
+            f"continuation: the {self.label} ends at {prob.parameter} = {pt.p:.9g}: the "
+            f"fixed-step flow map is discontinuous just beyond it (the residual jumps to "
+            f"{r:.1e} within {h:.0e} in scaled arclength, {pt.n_impacts} impacts per period "
+            "on both sides): a contact ends and restarts within a step, or its penetration dips "
+            "to zero and restarts (the Lankarani-Nikravesh law's onset-velocity memory resets "
+            "there), so the orbits on the two sides are not joined by a continuous branch of the "
+            "discrete map. Finer integration (dt_scale=0.5, steps_per_contact=64) moves or "
+            "removes the jump; a start beyond it (starts=...) traces the far side",
+            ContinuationWarning, stacklevel=3)
+        return "discontinuous map"
+
     def _warn_unverified(self, prob, p_a, p_b):
         warnings.warn(
             f"continuation: the {self.label} passed a corner near {prob.parameter} = {p_a:.9g} "
@@ -557,7 +578,7 @@ class Tracer:
                 if not jumped:
                     if ds < self.ds_min or (budget is not None and budget <= 0):
                         if not (near_grazing or strict or budget is not None):
-                            reason = "step underflow"
+                            reason = self._jump_end(prob, pts[-1], z, t_in, "step underflow")
                             break
                         new = self._more_segments(prob, pts[-1])
                         if self.debug:
@@ -571,8 +592,9 @@ class Tracer:
                             except ConvergenceError:
                                 new = None
                         if new is None:
-                            reason = "stuck at a corner"
-                            self._warn_stuck(prob, pts[-1].p)
+                            reason = self._jump_end(prob, pts[-1], z, t_in, "stuck at a corner")
+                            if reason == "stuck at a corner":
+                                self._warn_stuck(prob, pts[-1].p)
                             break
                         prob = new[0]
                         w, wp = prob.scale_u, prob.scale_p
@@ -678,7 +700,9 @@ class Tracer:
                 break
             if (len(steps) >= self.progress_points
                     and sum(steps[-self.progress_points:]) < self.progress_min):
-                reason = "no progress"
+                reason = self._jump_end(prob, pt, z, t_in, "no progress")
+                if reason != "no progress":
+                    break
                 advanced = sum(steps[-self.progress_points:])
                 warnings.warn(
                     f"continuation: the {self.label} made no progress near {pt.p:.9g} (its last "

@@ -79,6 +79,12 @@ Work = namedtuple("Work", [
     "from_before",           # (ne,) bool: contact under way at t0
     "dtc",                   # (ne,) step inside the current contact (s; inf: none)
     "d_sw",                  # (ne,) delta where the graded exit phase starts (-1: unknown)
+    "dtn",                   # (ne,) nominal contact step: contact duration / spc (s)
+    # the derivative of the map as computed (sens_steps.py), with want_var:
+    "SR", "SE",              # (SR_ROWS, m), (SE_ROWS, ne, m) sensitivities of times and steps
+    "ft",                    # (2N,) df/dt at a fixed state
+    "W1", "KP1", "SR1",      # (4, max(2N, ne), 1), (ns, 2N, 1), (SR_ROWS, 1): one column
+    "Bv",                    # (2N,) a step's derivative in its length
 ])
 Work.__doc__ = "Work arrays of the integration loop, allocated by ``integrate_kernel``."
 

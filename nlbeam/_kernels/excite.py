@@ -94,6 +94,26 @@ def excite_yyd(t, code, p, tab):
 
 
 @njit(cache=True)
+def excite_jerk(t, code, p, tab):
+    """y''' at time t: the derivative of the y'' that ``excite`` returns (0 on a sampled table
+    without a y'' column, where that y'' is constant in each cell)."""
+    if code == 0:
+        return p[0] * p[1] * p[1] * p[1] * math.sin(p[1] * t + p[2])
+    elif code == 1:
+        i, th, th2, th3, h, st = _table_cell(t, p, tab)
+        if st != 0 or math.isnan(tab[i, 2]):
+            return 0.0
+        return ((12.0 * th - 6.0) / (h * h) * tab[i, 1] + (6.0 * th - 4.0) / h * tab[i, 2]
+                + (6.0 - 12.0 * th) / (h * h) * tab[i + 1, 1]
+                + (6.0 * th - 2.0) / h * tab[i + 1, 2])
+    y3 = 0.0
+    for k in range(tab.shape[0]):
+        w = tab[k, 0]
+        y3 += tab[k, 1] * w * w * w * math.sin(w * t + tab[k, 2])
+    return y3
+
+
+@njit(cache=True)
 def excitation_many(code, p, tab, t, out):
     """Evaluate (y, y') at every t into out (n, 2); status of the first failure."""
     for i in range(t.shape[0]):

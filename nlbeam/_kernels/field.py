@@ -172,12 +172,21 @@ def _deriv_var_at(y, yd, s, P, dvm, disc, sysa, ks, kP, fel):
     """The body of ``deriv_var`` with the excitation (y, y') given, so that two stages at the
     same time (RK4's 2nd and 3rd) evaluate it once (the same doubles: it is deterministic).
     Without the custom-force hook: callers check _HAS_USER."""
+    return _deriv_var_at_t(y, yd, 0.0, fel, False, s, P, dvm, disc, sysa, ks, kP, fel)
+
+
+@njit(cache=True, inline="always")
+def _deriv_var_at_t(y, yd, ydd, Ts, timed, s, P, dvm, disc, sysa, ks, kP, fel):
+    """``_deriv_var_at``, and with ``timed`` the sensitivity of the stage's time too: kP gets
+    (df/dt) Ts (m,) added, df/dt through y(t), y'(t) (y'' = ydd). Without timed the same
+    operations as before, bit for bit."""
     MinvK = sysa.MinvK
     MinvC = sysa.MinvC
     mek = sysa.mek
     mec = sysa.mec
     etype = sysa.etype
     ew = sysa.ew
+    ewy = sysa.ewy
     epar = sysa.epar
     mw = sysa.mw
     N = MinvK.shape[0]
@@ -195,6 +204,8 @@ def _deriv_var_at(y, yd, s, P, dvm, disc, sysa, ks, kP, fel):
             acc = 0.0
             for j in range(N):
                 acc -= MinvK[i, j] * P[j, c] + MinvC[i, j] * P[N + j, c]
+            if timed:
+                acc += (mek[i] * yd + mec[i] * ydd) * Ts[c]
             kP[N + i, c] = acc
     for e in range(ne):
         d, dd = kinematics(e, s, y, yd, sysa)
@@ -210,6 +221,9 @@ def _deriv_var_at(y, yd, s, P, dvm, disc, sysa, ks, kP, fel):
             for j in range(N):
                 dx += ew[e, j] * P[j, c]
                 dv += ew[e, j] * P[N + j, c]
+            if timed:
+                dx += ewy[e] * yd * Ts[c]
+                dv += ewy[e] * ydd * Ts[c]
             g = dfd * dx + dfdd * dv + dfdv * dvm[e, c]
             for i in range(N):
                 kP[N + i, c] -= mw[e, i] * g
@@ -253,3 +267,107 @@ def _user_force_terms(t, s, P, want_var, y, yd, sysa, ks, kP):
                     dq += Minv[i, j] * (uf[1, j] - uf[0, j]) / hq
                 for c in range(m):
                     kP[N + i, c] += dq * P[q, c]
+
+
+@njit(cache=True)
+def field_dt(t, s, disc, sysa, xc, xp, xtab, ft):
+    """ft (2N,) = the partial derivative in t of the field f(t, s) at a fixed state (through
+    the excitation y(t), y'(t)); status."""
+    mek = sysa.mek
+    mec = sysa.mec
+    etype = sysa.etype
+    ewy = sysa.ewy
+    epar = sysa.epar
+    mw = sysa.mw
+    N = mek.shape[0]
+    y, yd, ydd, st = excite(t, xc, xp, xtab)
+    if st != 0:
+        return st
+    for i in range(N):
+        ft[i] = 0.0
+        ft[N + i] = mek[i] * yd + mec[i] * ydd
+    for e in range(etype.shape[0]):
+        if ewy[e] == 0.0:
+            continue
+        d, dd = kinematics(e, s, y, yd, sysa)
+        f, dfd, dfdd, dfdv = element_force(etype[e], epar[e], d, dd, disc[e, 1], disc[e, 0])
+        g = ewy[e] * (dfd * yd + dfdd * ydd)
+        for i in range(N):
+            ft[N + i] -= mw[e, i] * g
+    if _HAS_USER:
+        _user_force_dt(t, s, sysa, xc, xp, xtab, ft)
+    return 0
+
+
+@njit(cache=True)
+def _user_force_dt(t, s, sysa, xc, xp, xtab, ft):
+    """Add M^-1 dq/dt of the custom force q(t, x, v, y(t), y'(t)) at a fixed state, by central
+    differences (step 1e-6 (|t| + 1e-3) s; one-sided where the excitation ends)."""
+    upar = sysa.upar
+    uf = sysa.uf
+    Minv = sysa.Minv
+    N = Minv.shape[0]
+    ht = 1e-6 * (abs(t) + 1e-3)
+    ta = t - ht
+    tb = t + ht
+    ya, yda, sta = excite_yyd(ta, xc, xp, xtab)
+    yb, ydb, stb = excite_yyd(tb, xc, xp, xtab)
+    if sta != 0:
+        ta = t
+        ya, yda, sta = excite_yyd(ta, xc, xp, xtab)
+    if stb != 0:
+        tb = t
+        yb, ydb, stb = excite_yyd(tb, xc, xp, xtab)
+    if tb == ta:
+        return
+    for i in range(N):
+        uf[0, i] = 0.0
+        uf[1, i] = 0.0
+        uf[2, i] = s[i]
+        uf[3, i] = s[N + i]
+    _USER_FORCE(ta, uf[2], uf[3], ya, yda, upar, uf[0])
+    _USER_FORCE(tb, uf[2], uf[3], yb, ydb, upar, uf[1])
+    for i in range(N):
+        acc = 0.0
+        for j in range(N):
+            acc += Minv[i, j] * (uf[1, j] - uf[0, j])
+        ft[N + i] += acc / (tb - ta)
+
+
+@njit(cache=True)
+def field_sens(t, s, P, dvm, disc, Trow, sysa, xc, xp, xtab, ks, kP, fel, ft):
+    """ks = f(t, s) and kP = its sensitivity J P + (df/d vminus) dvm + (df/dt) Trow; status."""
+    st = deriv(t, s, P, dvm, disc, True, sysa, xc, xp, xtab, ks, kP, fel)
+    if st != 0:
+        return st
+    st = field_dt(t, s, disc, sysa, xc, xp, xtab, ft)
+    N = s.shape[0] // 2
+    for q in range(N, 2 * N):
+        for c in range(P.shape[1]):
+            kP[q, c] += ft[q] * Trow[c]
+    return st
+
+
+@njit(cache=True)
+def element_rate_grad(et, par, delta, ddelta, vminus):
+    """Derivatives of the rates df/d(delta) and df/d(delta') of element_force (in contact,
+    delta > 0) in (delta, delta', vminus): six numbers, d(df/d delta)/d(delta, delta', vminus)
+    then d(df/d delta')/d(delta, delta', vminus)."""
+    if et == PWL_STOP or et == CUBIC or et == INACTIVE or delta <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    K = par[0]
+    d05 = math.sqrt(delta)
+    d15 = delta * d05
+    if et == HERTZ:
+        return 0.75 * K / d05, 0.0, 0.0, 0.0, 0.0, 0.0
+    if et == LANKARANI:
+        c = 0.75 * (1.0 - par[1] * par[1]) / vminus
+        fac = 1.0 + c * ddelta
+        if par[3] != 0.0 and fac < 0.0:
+            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        return (0.75 * K * fac / d05, 1.5 * K * d05 * c, -1.5 * K * d05 * c * ddelta / vminus,
+                1.5 * K * d05 * c, 0.0, -K * d15 * c / vminus)
+    mu = par[2]
+    if par[3] != 0.0 and K + mu * ddelta < 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    return 0.75 * (K + mu * ddelta) / d05, 1.5 * mu * d05, 0.0, 1.5 * mu * d05, 0.0, 0.0

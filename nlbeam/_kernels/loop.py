@@ -6,12 +6,16 @@ import numpy as np
 
 from .bundles import Outputs, Settings, Start, SystemArrays, Work
 from .codes import DP5, ERR_MAX_STEPS, ERR_STEP_UNDERFLOW, PWL_STOP, RK2, RK4, VMINUS_FLOOR
-from .contact import contact_rate, contact_step
+from .contact import contact_rate, contact_rate_sens, contact_step, contact_step_sens
 from .events import _crossing, _may_cross, delta_extremum, hermite5, locate, step_extrema
+from .events_sens import boundary_time_sens, dsw_sens, onset_sens
 from .excite import excite, excite_yyd
 from .field import deriv, deriv_plain, element_force, has_event, kinematics
 from .graded import rk_step_graded
 from .hook import _HAS_USER, njit
+from .sens_steps import (SE_DSW, SE_DTC, SE_ROWS, SR_DSC, SR_GEND, SR_GH, SR_H, SR_ROWS, SR_T,
+                         SR_TN, SR_TREF, SR_U0, rk_step_sens, step_length_derivative,
+                         var_time_step)
 from .steps import _rk_step_plain, _rk_step_var, rk_step, tableau
 
 
@@ -91,17 +95,26 @@ def integrate_kernel(system, xc, xp, xtab, settings, start, outputs):
     work = Work(KS=KS, KP=KP, KT=KT, ytmp=ytmp, Ptmp=Ptmp, fel=fel, err_w=err_w, s=s, P=P,
                 dvm=dvm, disc=disc, s_new=s_new, P_new=P_new, s_try=s_try, dummyP=dummyP, f0=f0,
                 f1=f1, steps_in_contact=steps_in_contact, from_before=from_before, dtc=dtc,
-                d_sw=d_sw)
-    return _integrate_loop(sysa, xc, xp, xtab, cfg, Outputs(*outputs), work)
+                d_sw=d_sw, dtn=np.full(ne, np.inf), SR=np.zeros((SR_ROWS, m)),
+                SE=np.zeros((SE_ROWS, ne, m)), ft=np.zeros(n), W1=np.zeros((4, max(n, ne), 1)),
+                KP1=np.zeros((ns, n, 1)), SR1=np.zeros((SR_ROWS, 1)), Bv=np.zeros(n))
+    # want_var as a compile-time constant: the loop without the variational equations is
+    # compiled without their code (numba prunes the branches on a literal argument)
+    if cfg.want_var:
+        return _integrate_loop(sysa, xc, xp, xtab, cfg, Outputs(*outputs), work, True)
+    return _integrate_loop(sysa, xc, xp, xtab, cfg, Outputs(*outputs), work, False)
 
 
 @njit(cache=True)
-def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
+def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
     """The body of integrate_kernel, on the work arrays it allocated (no reference counting
-    here: see ``njit``): the bundles' fields as local names, then the loop."""
+    here: see ``njit``): the bundles' fields as local names, then the loop. With want_var
+    (a literal), P, dvm and the rows of SR and SE carry the derivative of the map as computed:
+    every step size and step time that depends on the state is differentiated too
+    (sens_steps.py, events_sens.py)."""
     meth, t0, t_end, dt, spc = cfg.meth, cfg.t0, cfg.t_end, cfg.dt, cfg.spc
     rtol, atol, h_init, max_steps = cfg.rtol, cfg.atol, cfg.h_init, cfg.max_steps
-    events_on, want_var, track_xmax = cfg.events_on, cfg.want_var, cfg.track_xmax
+    events_on, track_xmax = cfg.events_on, cfg.track_xmax
     store_every, graded = cfg.store_every, cfg.graded
     out_t, out_s, out_d, out_f, ev_log = out.t, out.s, out.delta, out.force, out.ev_log
     s_end, disc_end, P_end, dvm_end = out.s_end, out.disc_end, out.P_end, out.dvm_end
@@ -112,6 +125,8 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
     s_try, dummyP, f0, f1 = work.s_try, work.dummyP, work.f0, work.f1
     steps_in_contact, from_before, dtc, d_sw = (work.steps_in_contact, work.from_before,
                                                 work.dtc, work.d_sw)
+    dtn, SR, SE, ft, Bv = work.dtn, work.SR, work.SE, work.ft, work.Bv
+    W1, KP1, SR1 = work.W1, work.KP1, work.SR1
     KAPPA = 0.25
     etype = sysa.etype
     N = sysa.MinvK.shape[0]
@@ -131,7 +146,20 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
                 winv += sysa.ew[e, j] * sysa.mw[e, j]
             K = sysa.epar[e, 0]
             pot = 0.8 * K * max(d, 0.0) ** 2.5 if etype[e] != PWL_STOP else K * max(d, 0.0) ** 2
-            dtc[e] = min(contact_step(e, math.sqrt(dd * dd + pot * winv), 0.0, sysa, spc), dt)
+            v_eq = math.sqrt(dd * dd + pot * winv)
+            dtn[e] = contact_step(e, v_eq, 0.0, sysa, spc)
+            dtc[e] = min(dtn[e], dt)
+            if want_var and dtn[e] < dt and v_eq > 0.0:
+                # the contact step is a function of the state at the start (P: its sensitivity)
+                cs, dcs_dv, dcs_da = contact_step_sens(e, v_eq, 0.0, sysa, spc)
+                dpot = 2.0 * K * (max(d, 0.0) ** 1.5 if etype[e] != PWL_STOP else max(d, 0.0))
+                for c in range(m):
+                    dx = 0.0
+                    dv = 0.0
+                    for j in range(N):
+                        dx += sysa.ew[e, j] * P[j, c]
+                        dv += sysa.ew[e, j] * P[N + j, c]
+                    SE[SE_DTC, e, c] = dcs_dv * (dd * dv + 0.5 * winv * dpot * dx) / v_eq
 
     n_stored = 0
     n_steps = 0
@@ -156,6 +184,8 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
     g_u = 0.0
     g_end = 0.0
     g_h = 0.0
+    t_dep = False   # with want_var: d t / d z (SR[SR_T]) may be nonzero
+    sens_step = False
 
     st = deriv(t, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0, KP[0], fel)
     n_rhs += 1
@@ -181,6 +211,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
         tau_ev = 0.0
         hit_grid = False
         enter_exit = False
+        sens_step = False   # the step's sensitivities of its end time are in SR[SR_TN]
         if phase == 2:
             y, yd, ydd, st = excite(t, xc, xp, xtab)
             d, dd = kinematics(pe, s, y, yd, sysa)
@@ -206,12 +237,30 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
             if g_t0 + (g_u + hs) ** 2 >= t_end:
                 hs = math.sqrt(t_end - g_t0) - g_u
                 cut = True
-            st, t_new = rk_step_graded(meth, 1, g_u, hs, g_t0, pe, s, t, P, dvm, disc, want_var,
-                                       sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp,
-                                       fel)
+            if want_var:
+                # the step's own sensitivity: g_h, the remainder g_end - g_u, or up to t_end
+                for c in range(m):
+                    if cut:
+                        SR[SR_H, c] = (-SR[SR_TREF, c] / (2.0 * math.sqrt(t_end - g_t0))
+                                       - SR[SR_U0, c])
+                    elif hs == g_h:
+                        SR[SR_H, c] = SR[SR_GH, c]
+                    else:
+                        SR[SR_H, c] = SR[SR_GEND, c] - SR[SR_U0, c]
+                st, t_new = rk_step_sens(meth, phase, g_u, hs, g_t0, pe, s, t, P, dvm, disc,
+                                         sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp,
+                                         Ptmp, fel, ft, err_w, SR, SR_T)
+                sens_step = True
+            else:
+                st, t_new = rk_step_graded(meth, 1, g_u, hs, g_t0, pe, s, t, P, dvm, disc, False,
+                                           sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp,
+                                           Ptmp, fel)
             n_rhs += ns
             if cut:
                 t_new = t_end
+                if want_var:
+                    for c in range(m):
+                        SR[SR_TN, c] = 0.0
             ok = st == 0
             if ok:
                 st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0],
@@ -227,6 +276,9 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
                 phase = 0  # something happens inside the onset phase: fall back to time steps
                 continue
             g_u += hs
+            if want_var:
+                for c in range(m):
+                    SR[SR_U0, c] += SR[SR_H, c]
             if g_u >= g_end * (1.0 - 1e-12):
                 phase = 0
         elif phase == 2:
@@ -234,9 +286,18 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
             hu = min(g_h, g_u)
             if g_u - hu < 1e-9 * g_h:
                 hu = g_u
-            st, t_new = rk_step_graded(meth, 2, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, want_var,
-                                       sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp,
-                                       fel)
+            if want_var:
+                # the step -g_h, or the rest -g_u down to u = 0
+                for c in range(m):
+                    SR[SR_H, c] = -SR[SR_U0, c] if hu == g_u else -SR[SR_GH, c]
+                st, t_new = rk_step_sens(meth, phase, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, sysa,
+                                         xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel,
+                                         ft, err_w, SR, SR_T)
+                sens_step = True
+            else:
+                st, t_new = rk_step_graded(meth, 2, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, False,
+                                           sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp,
+                                           Ptmp, fel)
             n_rhs += ns
             if st != 0 or t_new > t_end or t_new <= t:
                 phase = 0  # the record ends inside the exit phase (or it failed): time steps
@@ -251,6 +312,10 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
                 phase = 0
                 continue
             g_u -= hu
+            if want_var:
+                for c in range(m):
+                    SR[SR_U0, c] += SR[SR_H, c]
+                    SR[SR_H, c] = 0.0   # the polishing steps below: at fixed lengths
             st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0], fel)
             n_rhs += 1
             if g_u <= 0.0:
@@ -267,8 +332,9 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
                         if want_var:
                             for c in range(m):
                                 dummyP[q, c] = P_new[q, c]
-                    st = rk_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var, sysa, xc,
-                                 xp, xtab, f1, s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+                    st = var_time_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var,
+                                       sysa, xc, xp, xtab, f1, s_new, P_new, KS, KP, KT, ytmp,
+                                       Ptmp, fel, err_w, ft, SR, SR_TN)
                     t_new = t_new + tau
                     st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1,
                                KP[0], fel)
@@ -282,11 +348,17 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
                         if want_var:
                             for c in range(m):
                                 dummyP[q, c] = P_new[q, c]
-                    st = rk_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var, sysa, xc,
-                                 xp, xtab, f1, s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+                    st = var_time_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var,
+                                       sysa, xc, xp, xtab, f1, s_new, P_new, KS, KP, KT, ytmp,
+                                       Ptmp, fel, err_w, ft, SR, SR_TN)
                     t_new = t_new + tau
                     st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1,
                                KP[0], fel)
+                if want_var:
+                    # the landing time is the boundary's: its derivative (the last polishing
+                    # steps are short: the step's derivative in its length is the field)
+                    boundary_time_sens(pe, t_new, f1, P_new, SR, SR[SR_DSC], 0.0, sysa, xc, xp,
+                                       xtab)
                 ev = pe
                 tau_ev = t_new - t
                 phase = 0
@@ -296,27 +368,65 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
                 tg = t0 + (k_grid + 1) * dt if k_grid + 1 < n_grid else t_end
                 if n_in > 0:
                     hc = np.inf
+                    e_h = -1
                     for e in range(ne):
                         if disc[e, 0] != 0.0 and dtc[e] < hc:
                             hc = dtc[e]
+                            e_h = e
                     # explicit stability: the law's stiffness and damping rates
                     lam = contact_rate(t, s, disc, sysa, xc, xp, xtab)
+                    capped = False
                     if lam * hc > 0.5:
                         hc = 0.5 / lam
+                        capped = True
                     h = hc
                     if h >= t_end - t:
                         h = t_end - t
                         hit_grid = True
+                    if want_var:
+                        # the step's sensitivity: the contact step's, the stability limit's
+                        # (through the state), or -dt/dz when the step ends at t_end
+                        if hit_grid:
+                            for c in range(m):
+                                SR[SR_H, c] = -SR[SR_T, c]
+                        elif capped:
+                            contact_rate_sens(t, s, P, dvm, disc, SR[SR_T], sysa, xc, xp, xtab,
+                                              SR[SR_H])
+                            for c in range(m):
+                                SR[SR_H, c] *= -0.5 / (lam * lam)
+                        else:
+                            for c in range(m):
+                                SR[SR_H, c] = SE[SE_DTC, e_h, c]
                 else:
                     h = tg - t
                     hit_grid = True
-            else:
+                    if want_var and t_dep:
+                        for c in range(m):
+                            SR[SR_H, c] = -SR[SR_T, c]   # onto the grid: t fixed at the end
+            elif want_var and t_dep:
+                # the controller's steps taken as given, the last one ending at t_end
+                hh = -1.0 if h >= t_end - t else 0.0
+                for c in range(m):
+                    SR[SR_H, c] = hh * SR[SR_T, c]
+            if not fixed:
                 if h >= t_end - t:
                     h = t_end - t
                 if h < 1e-14 * max(abs(t), 1.0):
                     status = ERR_STEP_UNDERFLOW
                     break
-            if not want_var and meth != RK2:
+            # with the variational equations: a step whose start or length depends on the state
+            # (after an event, inside a contact) carries those sensitivities (rk_step_sens); in
+            # free flight from a grid point neither does, and the plain variational step serves
+            moving = want_var and (t_dep or n_in > 0 and fixed)
+            sens_step = moving
+            if moving:
+                # mode = phase (0 here) and e = pe, as at the graded steps' calls: the three
+                # calls share one compiled rk_step_sens (with literal modes numba compiled one
+                # per call, and every step of this loop, free flight too, cost ~20 % more)
+                st, t_dum = rk_step_sens(meth, phase, 0.0, h, 0.0, pe, s, t, P, dvm, disc, sysa,
+                                         xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel,
+                                         ft, err_w, SR, SR_T)
+            elif not want_var and meth != RK2:
                 # without variational equations: straight to the unrolled RK4/DP5 step (what
                 # rk_step would call), one call level less per step
                 st = _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_new,
@@ -401,11 +511,30 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
                                 enter_exit = True
             if ev >= 0 or enter_exit:
                 # re-take the step up to the boundary
-                st = rk_step(meth, t, tau_ev, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
-                             s_new, P_new, KS, KP, ytmp, Ptmp, fel, err_w)
+                if want_var:
+                    for c in range(m):
+                        SR[SR_H, c] = 0.0
+                if want_var and not t_dep:
+                    for c in range(m):
+                        SR[SR_T, c] = 0.0
+                st = var_time_step(meth, t, tau_ev, s, P, dvm, disc, want_var, sysa, xc, xp, xtab,
+                                   f0, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel, err_w, ft, SR,
+                                   SR_T)
+                sens_step = True
                 if st != 0:
                     status = st
                     break
+                if want_var:
+                    # its length is the boundary's time, a function of the state
+                    st = step_length_derivative(meth, t, tau_ev, s, disc, sysa, xc, xp, xtab,
+                                                s_try, KS, KT, ytmp, fel, ft, err_w, W1, KP1,
+                                                SR1, Bv)
+                    if ev >= 0:
+                        boundary_time_sens(ev, t + tau_ev, Bv, P_new, SR, SR[SR_DSC], 0.0, sysa,
+                                           xc, xp, xtab)
+                    else:
+                        boundary_time_sens(pe, t + tau_ev, Bv, P_new, SR, SE[SE_DSW, pe], 1.0,
+                                           sysa, xc, xp, xtab)
                 t_new = t + tau_ev
                 hit_grid = False
                 st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1, KP[0],
@@ -444,6 +573,10 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
             if dd0 > 0.0 and dd1 <= 0.0:
                 th, dm = delta_extremum(pe, 1.0, t, t_new - t, s, s_new, f0, f1, sysa, xc, xp, xtab)
                 d_sw[pe] = KAPPA * max(dm, d0, d1)
+                if want_var:
+                    dsw_sens(pe, KAPPA, t, t_new, th, dm, d0, d1, yd0, yd1, s, s_new, f0, f1, P,
+                             P_new, dvm, disc, SR, sysa, xc, xp, xtab, KS, KP, fel, ft,
+                             SE[SE_DSW, pe])
         # grid samples passed by this step: exact at a grid hit, dense output otherwise
         while k_grid < n_grid:
             kk = k_grid + 1
@@ -475,10 +608,19 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
             for q in range(n):
                 for c in range(m):
                     P[q, c] = P_new[q, c]
+            if sens_step:
+                for c in range(m):
+                    SR[SR_T, c] = SR[SR_TN, c]
+                # a step onto the grid point: the time no longer depends on the state
+                t_dep = not (fixed and hit_grid and n_in == 0)
         if enter_exit:
             phase = 2
             g_u = math.sqrt(d_sw[pe])
             g_h = g_u / n_grade
+            if want_var:
+                for c in range(m):
+                    SR[SR_U0, c] = SE[SE_DSW, pe, c] / (2.0 * g_u)
+                    SR[SR_GH, c] = SR[SR_U0, c] / n_grade
         # ---- switch the discrete state at an event
         if ev >= 0:
             y, yd, ydd, st = excite(t, xc, xp, xtab)
@@ -492,31 +634,24 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
             if abs(d) > max_land:
                 max_land = abs(d)
             if disc[ev, 0] == 0.0:
-                disc[ev, 0] = 1.0
-                disc[ev, 1] = dd if dd > VMINUS_FLOOR else VMINUS_FLOOR
-                n_imp += 1
-                steps_in_contact[ev] = 0
-                d_sw[ev] = -1.0
+                vm = dd if dd > VMINUS_FLOOR else VMINUS_FLOOR
                 dd2 = sysa.ewy[ev] * ydd
                 for j in range(N):
                     dd2 += sysa.ew[ev, j] * f0[N + j]
-                dtc[ev] = contact_step(ev, disc[ev, 1], dd2, sysa, spc)
+                dtn[ev] = contact_step(ev, vm, dd2, sysa, spc)
+                dtc[ev] = dtn[ev]
                 if fixed and dtc[ev] > dt:
                     dtc[ev] = dt  # a soft contact never gets a longer step than free flight
                 if want_var:
-                    # sensitivity of the onset velocity: d vminus = [0,w] P + delta'' dt_e,
-                    # dt_e = -([w,0] P) / delta'
-                    ew = sysa.ew
-                    dd2 = sysa.ewy[ev] * ydd
-                    for j in range(N):
-                        dd2 += ew[ev, j] * f0[N + j]
-                    for c in range(m):
-                        wx = 0.0
-                        wv = 0.0
-                        for j in range(N):
-                            wx += ew[ev, j] * P[j, c]
-                            wv += ew[ev, j] * P[N + j, c]
-                        dvm[ev, c] = wv - dd2 * wx / disc[ev, 1]
+                    # the onset velocity and the contact steps as functions of the state (the
+                    # landed sensitivities P, SR[SR_T]; the free-flight field: before the switch)
+                    onset_sens(ev, t, s, P, dvm, disc, dd, ydd, dd2, dtc[ev] < dtn[ev], SR, SE,
+                               sysa, xc, xp, xtab, KS, KP, fel, ft, spc)
+                disc[ev, 0] = 1.0
+                disc[ev, 1] = vm
+                n_imp += 1
+                steps_in_contact[ev] = 0
+                d_sw[ev] = -1.0
                 if fixed and graded and dd > 0.0 and n_in == 0:
                     phase = 1
                     pe = ev
@@ -524,6 +659,12 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
                     g_u = 0.0
                     g_end = math.sqrt(n_grade * dtc[ev])
                     g_h = g_end / n_grade
+                    if want_var:
+                        for c in range(m):
+                            SR[SR_TREF, c] = SR[SR_T, c]
+                            SR[SR_U0, c] = 0.0
+                            SR[SR_GEND, c] = n_grade * SE[SE_DTC, ev, c] / (2.0 * g_end)
+                            SR[SR_GH, c] = SR[SR_GEND, c] / n_grade
                 else:
                     phase = 0
             else:

@@ -200,3 +200,65 @@ def test_retrace_detector_on_a_polyline():
     loop = [P(np.cos(a), np.sin(a)) for a in np.linspace(0, 2 * np.pi + 0.3, 30)]
     (kind, i), k = run(Retrace(0.1, [1.0], 1.0), loop)
     assert kind == "same" and i == 0 and np.linspace(0, 2 * np.pi + 0.3, 30)[k] > 2 * np.pi
+
+
+class Jump(Problem):
+    """R(u, p) = (u1 - p - g(p), u2 - p^2 / 2) with g(p) = kink(p - p0): a jump of height
+    ``jump`` at p0 (kind 'jump'), or a continuous but steep sqrt(max(p - p0, 0)) (kind 'sqrt')
+    that a grazing point of a stiff contact resembles. The same 'number of impacts' on both
+    sides. Multipliers: those of I + dR/du / 10."""
+
+    def __init__(self, p0, kind, jump=1e-2):
+        self.p0, self.kind, self.jump = p0, kind, jump
+        self.scale_u = np.ones(2)
+        self.scale_p = 1.0
+
+    def g(self, p):
+        d = p - self.p0
+        if self.kind == "jump":
+            return self.jump if d > 0 else 0.0
+        return float(np.sqrt(max(d, 0.0)))
+
+    def evaluate(self, u, p, jac=True, jac_p=True):
+        R = np.array([u[0] - p - self.g(p), u[1] - 0.5 * p ** 2])
+        J = np.eye(2)
+        return Evaluation(R, J if jac else None, np.array([-1.0, -p]) if jac_p else None,
+                          [np.eye(2) + 0.1 * J] if jac else [], abs(u[0]), 3)
+
+    def jacobian_p(self, u, p, ev=None):
+        return np.array([-1.0, -p])
+
+    def multipliers(self, Ms):
+        return np.sort(np.linalg.eigvals(Ms[0]))[::-1]
+
+    def adapt(self, u, p):
+        return None
+
+
+def test_map_jump_tells_a_jump_from_a_steep_continuous_map():
+    from continuation.corners import map_jump
+    t = np.array([1.0, 0.0, 1.0]) / np.sqrt(2.0)  # the tangent of the branch u1 = p
+    for kind, p0, expect in (("jump", 0.5 + 3e-8, True), ("sqrt", 0.5 + 3e-8, False),
+                             ("jump", 0.5 + 0.1, False)):
+        prob = Jump(p0, kind)
+        z = np.array([0.5, 0.125, 0.5])
+        got = map_jump(prob, z, t)
+        assert (got is not None) == expect, (kind, p0, got)
+        if expect:
+            h, r = got
+            assert h * t[-1] > 3e-8 and h <= 1e-6 and r == pytest.approx(1e-2, rel=1e-3)
+
+
+def test_branch_that_runs_onto_a_jump_of_the_map_says_so():
+    """The tracer cannot pass a jump of the map (no continuous branch goes on): the branch
+    ends there as 'discontinuous map' with a warning naming the value, not 'step underflow'.
+    (A jump small against the steps is stepped over, as an integration sweep would.)"""
+    prob = Jump(0.3, "jump", jump=0.5)
+    tr = Tracer(p_min=-1.0, p_max=1.0, ds=0.05, ds_max=0.05)
+    with pytest.warns(C.ContinuationWarning, match=r"ends at p = 0\.29999.*discontinuous"):
+        pts, loc, reason = tr.trace(prob, np.array([0.0, 0.0]), 0.0, direction=1)
+    assert reason == "discontinuous map"
+    assert 0.3 - 1e-5 < pts[-1].p <= 0.3
+    # the smooth side is traced to the end of the range
+    pts, loc, reason = tr.trace(prob, np.array([0.0, 0.0]), 0.0, direction=-1)
+    assert reason == "left the parameter range"

@@ -454,26 +454,6 @@ def test_the_unrolled_graded_step_is_the_tableau_step_bit_for_bit():
     assert n_cases == 480
 
 
-def test_a_flows_monodromy_is_unchanged_by_the_unrolled_steps():
-    # values of main before the unrolled variational steps (62b6a2e), where they are the same
-    # bit for bit; the tolerance leaves room for another libm's last bits
-    f = nlbeam.flow(PAPER, F40, [0.0, 0.0], 0.0, 0.025, monodromy=True)
-    np.testing.assert_allclose(f.monodromy, [[0.7643562730355696, 0.0018813561055467272],
-                                             [-49.43899049299372, 0.49476422244390456]],
-                               rtol=1e-12)
-    np.testing.assert_allclose(f.dvminus_dstate0, [[-124.14332646811589, 0.5161102311861241]],
-                               rtol=1e-12)
-    # a start inside a contact: the sensitivity to the onset velocity too
-    f = nlbeam.flow(PAPER, F40, [1.03e-4, 0.02], 0.0, 0.025, monodromy=True)
-    assert f.n_impacts == 1
-    np.testing.assert_allclose(f.monodromy, [[4.68980057756389, 0.003537226142784413],
-                                             [-1276.4903409567921, -0.9285781025564721]],
-                               rtol=1e-12)
-    np.testing.assert_allclose(f.dstate_dvminus0, [[0.0018278964997235734],
-                                                   [-0.4819332575413209]], rtol=1e-12)
-    np.testing.assert_allclose(f.dvminus_dvminus0, [[-0.26795972037116533]], rtol=1e-12)
-
-
 def test_xmax_is_the_max_of_the_dense_output():
     # xmax is refined on the quintic dense output only where a velocity changes sign and a
     # bound says the quintic could exceed the running max; a wrong skip leaves xmax below the

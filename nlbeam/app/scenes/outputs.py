@@ -163,8 +163,25 @@ def write_table(d, variants, out_dir, measured=None, swept=None):
     cols = list(dict.fromkeys(k for r in rows for k in r)) or _EMPTY_COLUMNS[kind]
     wr = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
     wr.writeheader()
-    for r in rows:
+    for r in (map(_peak_row, rows) if kind == "peaks" else rows):
         wr.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in r.items()})
     path = os.path.join(out_dir, d["file"])
     write_text_atomic(path, buf.getvalue())
     return path
+
+
+def _peak_row(row):
+    """A peaks-table row with the diagram's numbers to the digits they support: branch
+    frequency, distance and tolerance to a hundredth of the match's tolerance (the branch
+    point matched moves with the tracer's steps), the prominence to 0.01 decade, xmax to
+    1e-3 of itself (the matched point's)."""
+    out = dict(row)
+    tol = row.get("tolerance_hz", math.nan)
+    if isinstance(tol, float) and math.isfinite(tol) and tol > 0:
+        for key in ("branch_frequency_hz", "distance_hz", "tolerance_hz"):
+            out[key] = with_error(row[key], tol / 100)
+    out["prominence_dec"] = with_error(row["prominence_dec"], 0.01)
+    x = row["xmax_m"]
+    if isinstance(x, float) and math.isfinite(x) and x != 0:
+        out["xmax_m"] = with_error(x, 1e-3 * abs(x))
+    return out
