@@ -128,6 +128,7 @@ def _frc(args):
     import continuation
 
     _check_out(args, "out", "plot")
+    _check_workers(args)
     log = _log(args)
     _check_knobs(args, "periodic")
     model = _model(args)
@@ -238,6 +239,7 @@ def _simulate(args):
     _check_out(args, "out", "plot")
     import stochastic
 
+    _check_workers(args)
     log = _log(args)
     _check_knobs(args, "stochastic")
     model = _model(args)
@@ -456,6 +458,13 @@ def _parser():
                         help="no progress and no results; warnings and errors still go to stderr")
     sub = parser.add_subparsers(dest="command", required=True)
 
+    def parallel_opts(p, what, default):
+        p.add_argument("--workers", type=int, default=None,
+                       help=f"local processes for the {what} (default {default})")
+        p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help=f"run the {what} on this Dask scheduler, e.g. tcp://host:8786 "
+                       "(pip install 'nlbeam[distributed]')")
+
     p = sub.add_parser("demo", parents=[common], help="a short version of `nlbeam figures`: "
                        "every kind of figure and table on a small diagram and 10 s records "
                        f"({DEMO_DURATION} once the kernels are compiled)",
@@ -528,6 +537,8 @@ def _parser():
                    help="Floquet multipliers of every point (needed for period doublings and "
                    "solid/dashed branches); default on")
     model_opts(p)
+    parallel_opts(p, "brute-force sweeps, branches and error estimates (the same diagram)",
+                  "1: this process")
     p.add_argument("--out", default="frc.h5", help="HDF5 result file, default frc.h5")
     p.add_argument("--plot", default=None, help="also write the diagram (PNG/PDF/SVG)")
     p.set_defaults(func=_frc)
@@ -593,6 +604,7 @@ def _parser():
                    help=f"any of {', '.join(CHANNELS)} (delta: penetration x - y, m; force: N); "
                    f"default {_shown(SIMULATE_CHANNELS)}")
     model_opts(p)
+    parallel_opts(p, "records of --seeds", "the CPU count, at most one per seed")
     p.add_argument("--out", default="stochastic.h5", help="HDF5 result file, default stochastic.h5")
     p.add_argument("--plot", default=None, help="also write the PSDs (PNG/PDF/SVG)")
     p.add_argument("--f-max", type=float, default=None,
