@@ -50,21 +50,10 @@ class Pool:
         self.scheduler = scheduler
         self.workers = workers
         self._client = self._own = self._pool = None
-        if scheduler is not None:
-            try:
-                from distributed import Client
-            except ImportError:
-                raise RuntimeError("scheduler: Dask is not installed; "
-                                   "pip install 'nlbeam[distributed]'") from None
-            if isinstance(scheduler, Client):
-                self._client = scheduler
-            else:
-                try:
-                    self._client = Client(str(scheduler), timeout=f"{connect_timeout}s")
-                except (OSError, TimeoutError) as exc:
-                    raise RuntimeError(f"scheduler: cannot reach the Dask scheduler at "
-                                       f"{scheduler!r}: {exc}") from None
-                self._own = True
+        if scheduler is not None:  # Dask lives on the application floor (tests/test_floors)
+            from nlbeam.app.sweeps import dask_client
+
+            self._client, self._own = dask_client(scheduler, connect_timeout)
         self.size = (len(self._client.scheduler_info().get("workers", {})) or 1
                      if self._client is not None else (workers or os.cpu_count() or 1))
 
