@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import time
 import warnings
 
 _UNITS = ("Units: displacements and amplitudes in m (1e-4 = 0.1 mm), frequencies in Hz, "
