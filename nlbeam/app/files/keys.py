@@ -86,10 +86,11 @@ _READERS = ("nlbeam/app/plots", "nlbeam/app/cli.py", "nlbeam/app/demo.py",
 ANALYSIS_CODE = {
     "periodic": (("nlbeam", "continuation"), _READERS),
     "stochastic": (("nlbeam", "stochastic"), _READERS),
+    "chart": (("nlbeam", "continuation"), _READERS),
 }
 
 
 def analysis_fingerprint(kind) -> str:
     """``code_fingerprint`` of the source the analysis ``kind`` ('periodic', 'stochastic')
-    depends on (``ANALYSIS_CODE``)."""
+    depends on (``ANALYSIS_CODE``; 'chart' too)."""
     return code_fingerprint(*ANALYSIS_CODE[kind])

@@ -115,7 +115,8 @@ def plan(scene, out_dir):
                              f"{'' if stability else ', no stability'}"))
         if need_chart:
             c = scene.chart
-            inputs = {"analysis": "chart", "model": m, "chart": c, "code": code_fingerprint()}
+            inputs = {"analysis": "chart", "model": m, "chart": c,
+                      "code": analysis_fingerprint("chart")}
             jobs.append(_job("chart", label, inputs, cache,
                              f"stability chart {c['f_range'][0]:g}-{c['f_range'][1]:g} Hz, "
                              f"A = {c['p_range'][0]:g}-{c['p_range'][1]:g} m, orders "
