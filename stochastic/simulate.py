@@ -772,6 +772,7 @@ def ensemble(model, make_excitation, seeds, duration, *, workers=None, scheduler
     from nlbeam.pool import Pool
 
     if processes is not None:
+        processes = integer("processes", processes, 1, 4096)
         warnings.warn("ensemble: processes= is deprecated; use workers= (the same meaning)",
                       DeprecationWarning, stacklevel=2)
         if workers is not None and workers != processes:
