@@ -518,8 +518,18 @@ def _short(values, n=8):
     return s + (f" and {len(values) - n} more" if len(values) > n else "")
 
 
+def _branch_job(args):
+    model, branch, integrator, every = args
+    return branch_errors(model, branch, integrator, every=every)
+
+
+def _levels_job(args):
+    model, amplitude, bf, integrator, kw = args
+    return bifurcation_levels(model, amplitude, bf, integrator, **kw)
+
+
 def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segments=1,
-                     max_levels=4, grazing_levels=1):
+                     max_levels=4, grazing_levels=1, pool=None):
     """Attach error estimates to a diagram computed with ``integrator``, in place: each Branch
     gets xmax_error, multipliers_error and error_sampled (``branch_errors``); each fold, period
     doubling and Neimark-Sacker point is located again at levels 1, 2, ... (at most
@@ -531,13 +541,15 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segment
     diagram's bracket. Returns a message for one warning ('' if all is met): sampled branch
     points whose multiplier error exceeds 10^-(digits - 1), bifurcations that could not be
     located at a finer step, folds / period doublings / Neimark-Sacker points whose error
-    exceeds the target."""
+    exceeds the target. pool: an nlbeam.pool.Pool running the branches and the bifurcations
+    in parallel (the same numbers as in this process)."""
     digits = target_digits(accuracy)
+    run = pool.map if pool is not None else (lambda f, items: [f(x) for x in items])
     mt = multiplier_target(digits)
     n_bad = n_tot = 0
     worst = None
-    for bi, b in enumerate(frc.branches):
-        xe, me, sm = branch_errors(model, b, integrator, every=every)
+    errs = run(_branch_job, [(model, b, integrator, every) for b in frc.branches])
+    for bi, (b, (xe, me, sm)) in enumerate(zip(frc.branches, errs)):
         b.xmax_error, b.multipliers_error, b.error_sampled = xe, me, sm
         if me is None or not sm.any():
             continue
@@ -547,13 +559,16 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segment
         if worst is None or me[k] > worst[0]:
             worst = (float(me[k]), float(b.values[k]), bi, b.order)
     failed, above = [], []
-    for bf in frc.bifurcations:
-        if bf.kind not in KINDS_LOCATED:
-            continue
-        at_grazing = bf.kind == "grazing" or not getattr(bf, "smooth", True)
-        lv = bifurcation_levels(model, frc.amplitude, bf, integrator, parameter=frc.parameter,
-                                digits=digits, segments=segments,
-                                max_levels=grazing_levels if at_grazing else max_levels)
+    located = [bf for bf in frc.bifurcations if bf.kind in KINDS_LOCATED]
+
+    def at_grazing(bf):
+        return bf.kind == "grazing" or not getattr(bf, "smooth", True)
+    levels = run(_levels_job, [
+        (model, frc.amplitude, bf, integrator,
+         dict(parameter=frc.parameter, digits=digits, segments=segments,
+              max_levels=grazing_levels if at_grazing(bf) else max_levels))
+        for bf in located])
+    for bf, lv in zip(located, levels):
         bf.levels = lv.values
         bf.error = lv.error
         if not math.isfinite(lv.error):
@@ -562,7 +577,7 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segment
         bf.value = lv.value
         if frc.parameter == "frequency":
             bf.frequency = lv.value
-        if not at_grazing and lv.error > 10.0 ** -digits * abs(lv.value):
+        if not at_grazing(bf) and lv.error > 10.0 ** -digits * abs(lv.value):
             above.append(bf)
     parts = []
     if n_bad:

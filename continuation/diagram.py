@@ -10,11 +10,13 @@ import numpy as np
 
 import nlbeam
 from nlbeam.parameters import check_parameter
+from nlbeam.pool import Pool
 from nlbeam.solver import period_step
 from nlbeam.summary import Summary, describe_value
 
 from . import _arguments as _args
 from ._newton import ContinuationWarning, ConvergenceError
+from .parallel import Speculator, take, taken
 from .pathfollow import Tracer
 from .seeding import brute_force
 from .shooting import (Integrator, PeriodicSolution, ShootingProblem, _problem_from_state,
@@ -352,9 +354,10 @@ def _halves_distance(pt):
     return float(np.max(np.abs(_halves_vector(pt))))
 
 
-def _trace_switched(tracer, pt, order, branches=(), pd_values=()):
+def _trace_switched(tracer, pt, order, branches=(), pd_values=(), overlap=None):
     P2, u2, p, t0 = _switch(tracer, pt, order)
-    overlap = _overlap_stop(branches, 2 * order, skip=2)
+    if overlap is None:  # (continuation.parallel records it instead)
+        overlap = _overlap_stop(branches, 2 * order, skip=2)
     d0 = [None, 0.0]
     hist = []  # (p, halves vector, problem) of the points so far
 
@@ -528,8 +531,10 @@ def _polished_starts(model, amplitude, frequency, parameter, orders, cand, segme
 
 
 def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer, integrator,
-                 segments, n_grid, switch, starts, brute, variational=True, progress=None):
+                 segments, n_grid, switch, starts, brute, variational=True, progress=None,
+                 pool=None):
     branches, bifs, pd_points = [], [], []
+    ahead = None if pool is None or pool.serial else Speculator(pool)  # continuation.parallel
     t_start = time.perf_counter()
     say = progress if progress is not None else (lambda msg: None)
     cand = []
@@ -537,7 +542,7 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
     if brute and parameter == "frequency":
         grid = np.linspace(p_range[0], p_range[1], n_grid)
         cand = brute_force(model, amplitude, grid, orders, integrator, segments=segments,
-                           stability=variational, report=dropped)
+                           stability=variational, report=dropped, pool=pool)
         say(f"brute-force grid: {len(cand)} periodic attractors at {n_grid} frequencies "
             f"({time.perf_counter() - t_start:.1f} s)")
     cand = [(f, n, s0, False) for (f, n, s0) in cand] + [(f, n, s0, True) for (f, n, s0) in starts]
@@ -564,16 +569,37 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
             f"{len(br.values)} points, {len(bifs) - n_bifs} bifurcations, ends: "
             f"{br.ends[0]} / {br.ends[1]} ({time.perf_counter() - t_start:.1f} s)")
 
-    def trace_from(f, order, sol_prob, u, p, origin):
-        """The branch through the polished start (sol_prob, u, p), unless it lies on a traced
-        branch."""
+    def on_branch(order, f, sol_prob, u, p):
         ev = sol_prob.evaluate(u, p, jac=False, jac_p=False)
-        if _on_branch(branches, order, f, ev.xmax,
-                      lambda: _shifted_states(sol_prob, u, p)) is not None:
+        return _on_branch(branches, order, f, ev.xmax,
+                          lambda: _shifted_states(sol_prob, u, p)) is not None
+
+    def trace_from(f, order, sol_prob, u, p, origin, key=None):
+        """The branch through the polished start (sol_prob, u, p), unless it lies on a traced
+        branch (key: of its trace started ahead, if any)."""
+        if on_branch(order, f, sol_prob, u, p):
+            if ahead is not None:
+                ahead.cancel(key)
             return
         tracer.label = f"order-{order} branch (from {f:.6g} Hz)"
-        pts, loc, ends = _both_ways(tracer, sol_prob, u, p, stop=_overlap_stop(branches, order))
+        res = take(ahead, key, _overlap_stop(branches, order))
+        pts, loc, ends = res if taken(res) else _both_ways(tracer, sol_prob, u, p,
+                                                            stop=_overlap_stop(branches, order))
         add(pts, loc, order, origin, ends)
+
+    def look_ahead(order, after=-1, n=2):
+        """Start tracing the next n starts of this order after index ``after`` that lie on no
+        traced branch (only where a pool is given; the result does not depend on it)."""
+        if ahead is None:
+            return
+        for i, (f, o, sol_prob, u, p, _) in enumerate(seeds):
+            if n <= 0:
+                break
+            if o != order or i <= after:
+                continue
+            n -= 1
+            if not ahead.pending(i) and not on_branch(o, f, sol_prob, u, p):
+                ahead.seed(i, tracer, f"order-{o} branch (from {f:.6g} Hz)", sol_prob, u, p)
 
     def fill_gaps(order, max_seeds=8):
         """Seed branches of this order inside the parts of p_range no branch covers (the
@@ -599,21 +625,32 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
 
     handled = set()
     for order in sorted(orders):
-        for (f, n, sol_prob, u, p, asked) in seeds:
+        look_ahead(order)
+    for order in sorted(orders):
+        for i, (f, n, sol_prob, u, p, asked) in enumerate(seeds):
             if n == order:
-                trace_from(f, n, sol_prob, u, p, "start" if asked else "brute-force")
+                trace_from(f, n, sol_prob, u, p, "start" if asked else "brute-force", key=i)
+                look_ahead(order, i, n=1)  # (a start next to it often lies on its branch)
         if order == 1 and brute and parameter == "frequency":
             fill_gaps(order)
         # branch switching at period doublings of this order
         if switch and 2 * order in orders:
+            pd_values = [q.p for q, o2, _ in pd_points if o2 == order]
+            for k, (pt, o, bi) in enumerate(pd_points):
+                if ahead is not None and o == order and bi is not None and k not in handled:
+                    ahead.switch(("pd", k), tracer, f"order-{2 * order} branch (from the "
+                                 f"period doubling at {pt.p:.6g})", pt, order, pd_values)
             for k, (pt, o, bi) in enumerate(pd_points):
                 if o != order or k in handled or bi is None:
+                    if ahead is not None:
+                        ahead.cancel(("pd", k))
                     continue  # (bi None: at a grazing point, no eigenvector to switch along)
                 handled.add(k)
                 tracer.label = (f"order-{2 * order} branch (from the period doubling at "
                                 f"{pt.p:.6g})")
-                res = _trace_switched(tracer, pt, order, branches,
-                                      [q.p for q, o2, _ in pd_points if o2 == order])
+                res = take(ahead, ("pd", k), _overlap_stop(branches, 2 * order, skip=2))
+                if not taken(res):
+                    res = _trace_switched(tracer, pt, order, branches, pd_values)
                 if res is None:
                     continue
                 pts, loc, ends = res
@@ -628,6 +665,8 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                     if o2 == order and k2 not in handled and \
                             abs(pt2.p - end.p) < 1e-3 * abs(end.p) + 1e-12:
                         handled.add(k2)
+    if ahead is not None:
+        ahead.close()
     _warn_hidden(dropped, branches, orders, n_grid, p_range)
     return branches, bifs, time.perf_counter() - t_start
 
@@ -863,7 +902,7 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
                        integrator=None, switch=True, brute_force_grid=True, starts=(),
                        ds=0.02, ds_max=0.5, max_angle=0.2, max_points=1000, tol=1e-10,
                        bif_tol=1e-8, stability=True, progress=None, accuracy=None,
-                       **integrator_kw):
+                       workers=1, scheduler=None, **integrator_kw):
     """The |x|max-versus-frequency diagram at excitation amplitude (m, or N for force).
 
     f_range: (f_lo, f_hi) Hz. Branches of each order in ``orders`` start from periodic
@@ -907,6 +946,11 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
     multipliers (computed at every 10th point; continuation.accuracy.estimate_diagram). One
     ContinuationWarning lists what misses the target (multipliers: 10^-(digits - 1)); the
     branch points stay those of the integrator (dt_scale, steps_per_contact) given.
+    workers: local processes (None: the CPU count; default 1, this process only), scheduler:
+    a Dask scheduler address or distributed.Client (nlbeam.pool): the brute-force sweeps,
+    branches and error estimates run in parallel, with exactly the serial result (branches
+    are traced ahead of their turn and taken only where the serial trace would have been the
+    same, continuation.parallel).
     Returns a FrequencyResponse (``settings['stability']`` says which).
     """
     _args.check_integrator("frequency_response", integrator, integrator_kw,
@@ -923,26 +967,30 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
     tracer = Tracer(p_min=f_lo, p_max=f_hi, ds=ds, ds_max=ds_max, max_angle=max_angle,
                     max_points=max_points, tol=tol, bif_tol=bif_tol)
     t0 = time.perf_counter()
-    branches, bifs, _ = _run_diagram(model, amplitude, (f_lo, f_hi), orders, "frequency", None,
-                                     tracer, integrator, segments, n_grid,
-                                     switch and stability, list(starts), brute_force_grid,
-                                     variational=stability, progress=progress)
-    _warn_coverage(branches, (f_lo, f_hi), orders, "frequency", "Hz",
-                   "try a start inside it (starts=[(f, order, state0)], e.g. from "
-                   "periodic_solution), a finer brute-force grid (n_grid), finer integration "
-                   "(dt_scale=0.5, steps_per_contact=64), multiple shooting (segments=4), a "
-                   "smaller ds_max or max_points larger.")
-    sup = _superharmonics(branches, model, integrator)
-    frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=float(amplitude),
-                            parameter="frequency", p_range=(f_lo, f_hi), branches=branches,
-                            bifurcations=bifs, superharmonics=sup,
-                            settings=dict(_settings(integrator, segments, n_grid, ds, ds_max,
-                                                    max_angle, tol, bif_tol, orders),
-                                          stability=int(bool(stability))))
-    frc.n_points = int(sum(len(b.values) for b in branches))
-    _estimate(frc, model, integrator, accuracy, segments, progress)
-    frc.wall_time = time.perf_counter() - t0
-    return frc
+    pool = Pool(workers, scheduler)
+    try:
+        branches, bifs, _ = _run_diagram(model, amplitude, (f_lo, f_hi), orders, "frequency", None,
+                                         tracer, integrator, segments, n_grid,
+                                         switch and stability, list(starts), brute_force_grid,
+                                         variational=stability, progress=progress, pool=pool)
+        _warn_coverage(branches, (f_lo, f_hi), orders, "frequency", "Hz",
+                       "try a start inside it (starts=[(f, order, state0)], e.g. from "
+                       "periodic_solution), a finer brute-force grid (n_grid), finer integration "
+                       "(dt_scale=0.5, steps_per_contact=64), multiple shooting (segments=4), a "
+                       "smaller ds_max or max_points larger.")
+        sup = _superharmonics(branches, model, integrator)
+        frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=float(amplitude),
+                                parameter="frequency", p_range=(f_lo, f_hi), branches=branches,
+                                bifurcations=bifs, superharmonics=sup,
+                                settings=dict(_settings(integrator, segments, n_grid, ds, ds_max,
+                                                        max_angle, tol, bif_tol, orders),
+                                              stability=int(bool(stability))))
+        frc.n_points = int(sum(len(b.values) for b in branches))
+        _estimate(frc, model, integrator, accuracy, segments, progress, pool)
+        frc.wall_time = time.perf_counter() - t0
+        return frc
+    finally:
+        pool.close()
 
 
 def continue_parameter(solution, parameter, p_range, *, model, segments=1, integrator=None,
@@ -998,7 +1046,7 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
     return frc
 
 
-def _estimate(frc, model, integrator, accuracy, segments, progress):
+def _estimate(frc, model, integrator, accuracy, segments, progress, pool=None):
     """Error estimates of the diagram's points and bifurcations (continuation.accuracy), one
     ContinuationWarning listing what misses the target; settings['accuracy'] says which."""
     if isinstance(accuracy, str) and accuracy == "off":
@@ -1009,7 +1057,8 @@ def _estimate(frc, model, integrator, accuracy, segments, progress):
     digits = target_digits(accuracy)
     frc.settings["accuracy"] = digits
     t = time.perf_counter()
-    notes = estimate_diagram(frc, model, integrator, accuracy=accuracy, segments=segments)
+    notes = estimate_diagram(frc, model, integrator, accuracy=accuracy, segments=segments,
+                             pool=pool)
     if progress is not None:
         progress(f"error estimates: {len(frc.bifurcations)} bifurcations, "
                  f"{sum(int(b.error_sampled.sum()) for b in frc.branches)} branch points "

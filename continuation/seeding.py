@@ -54,7 +54,7 @@ def shoot_from(model, amplitude, frequency, order, state, integrator, *, segment
 
 
 def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=1e-3, *,
-                light=1e-3, near=0.2, segments=1, stability=True, report=None):
+                light=1e-3, near=0.2, segments=1, stability=True, report=None, pool=None):
     """Periodic attractors from integrations on a frequency grid, sweeping up and down (the state
     carried over). Returns a list of (frequency, order, state at t = 0).
 
@@ -66,41 +66,56 @@ def brute_force(model, amplitude, freqs, orders, integrator, efolds=6.0, settle=
     with stability=False) is taken, as an orbit of its minimal order (when that order is asked
     for). report: a list to which
     (frequency, why) is appended for each grid integration that gave nothing."""
+    args = [(model, amplitude, sweep, orders, integrator, efolds, settle, light, near,
+             segments, stability) for sweep in (freqs, freqs[::-1])]
+    outs = pool.map(_sweep, args) if pool is not None else [_sweep(a) for a in args]
     found = []
+    for f_, r_ in outs:
+        found += f_
+        if report is not None:
+            report += r_
+    return found
+
+
+def _sweep(args):
+    """(found, report) of one sweep of brute_force over its frequencies (the state carried
+    over from one frequency to the next)."""
+    (model, amplitude, sweep, orders, integrator, efolds, settle, light, near, segments,
+     stability) = args
+    found, report = [], []
     rate = decay_rate(model)
     nmax = max(orders)
-    for sweep in (freqs, freqs[::-1]):
-        x = None
-        for f in sweep:
-            # one stored sample per period: every spp-th step (adaptive: output sample)
-            spp = integrator.steps_per_period(model, f) or ADAPTIVE_SAMPLES_PER_PERIOD
-            n_tr = int(min(4000, max(40, math.ceil(efolds / rate * f))))
-            n_tot = n_tr + 4 * nmax
-            tr = integrator.integrate(model, forcing(amplitude, f), n_tot / f,
-                                      period_step(f, spp), x0=x, store_every=spp)
-            S = np.hstack([tr.x, tr.v])[: n_tot + 1]
-            x = tr.state_end
-            tail = S[-(3 * nmax + 1):]
-            r = {n: periodicity(tail, n, f) for n in sorted(orders)}
-            settled = [n for n in sorted(orders) if r[n] < settle]
-            if settled:
-                found.append((float(f), settled[0], S[-1].copy()))
-                continue
-            # an orbit within `near` of the end state that attracts the trajectory keeps the
-            # states after n periods within about twice that of each other
-            tries = [n for n in sorted(orders) if r[n] <= 2 * near]
-            seed, seen = _seed_by_shooting(model, amplitude, f, tries, S[-1], tail,
-                                           integrator, light, near, segments, stability,
-                                           orders)
-            if seed is not None:
-                found.append(seed)
-            elif report is not None:
-                report.append((float(f), "not periodic (change over "
-                               + ", ".join(f"{n}: {v:.1e}" for n, v in r.items())
-                               + " periods), "
-                               + (("near it only " + ", ".join(seen)) if seen else
-                                  "no periodic orbit near it")))
-    return found
+    x = None
+    for f in sweep:
+        # one stored sample per period: every spp-th step (adaptive: output sample)
+        spp = integrator.steps_per_period(model, f) or ADAPTIVE_SAMPLES_PER_PERIOD
+        n_tr = int(min(4000, max(40, math.ceil(efolds / rate * f))))
+        n_tot = n_tr + 4 * nmax
+        tr = integrator.integrate(model, forcing(amplitude, f), n_tot / f,
+                                  period_step(f, spp), x0=x, store_every=spp)
+        S = np.hstack([tr.x, tr.v])[: n_tot + 1]
+        x = tr.state_end
+        tail = S[-(3 * nmax + 1):]
+        r = {n: periodicity(tail, n, f) for n in sorted(orders)}
+        settled = [n for n in sorted(orders) if r[n] < settle]
+        if settled:
+            found.append((float(f), settled[0], S[-1].copy()))
+            continue
+        # an orbit within `near` of the end state that attracts the trajectory keeps the
+        # states after n periods within about twice that of each other
+        tries = [n for n in sorted(orders) if r[n] <= 2 * near]
+        seed, seen = _seed_by_shooting(model, amplitude, f, tries, S[-1], tail,
+                                       integrator, light, near, segments, stability,
+                                       orders)
+        if seed is not None:
+            found.append(seed)
+        else:
+            report.append((float(f), "not periodic (change over "
+                           + ", ".join(f"{n}: {v:.1e}" for n, v in r.items())
+                           + " periods), "
+                           + (("near it only " + ", ".join(seen)) if seen else
+                              "no periodic orbit near it")))
+    return found, report
 
 
 def _seed_by_shooting(model, amplitude, f, tries, s_end, tail, integrator, light, near,

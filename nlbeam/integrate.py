@@ -379,6 +379,17 @@ class FlowMap:
         self._ev_log = np.zeros((0, 4))
         self._dt_checked = self.dt
 
+    def __getstate__(self):
+        # the compiled kernel is not pickled: a rebuilt numba dispatcher would compile again
+        # (minutes) in the process that unpickles it; it is looked up there instead
+        state = self.__dict__.copy()
+        state.pop("kernel", None)
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self.kernel = self.model.kernels().integrate_kernel
+
     def retarget(self, excitation):
         """This map for another excitation (same model, method, dt, tolerances): only the
         excitation's kernel arguments are renewed."""

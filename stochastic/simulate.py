@@ -8,6 +8,7 @@ feed the streaming estimators. Memory is one chunk, whatever the duration.
 from __future__ import annotations
 
 import math
+import os
 import re
 import sys
 import time
@@ -757,19 +758,32 @@ def _member(args):
     return simulate(model, make_excitation, seed=seed, **kwargs)
 
 
-def ensemble(model, make_excitation, seeds, duration, *, processes=None,
-             **kwargs) -> EnsembleResult:
-    """Run ``simulate`` once per seed (excitation ``make_excitation(seed)``) in a process
-    pool and combine. make_excitation must be picklable (a module-level function) unless
-    ``processes=1`` (run in this process). Other keywords go to :func:`simulate`."""
+def ensemble(model, make_excitation, seeds, duration, *, workers=None, scheduler=None,
+             processes=None, **kwargs) -> EnsembleResult:
+    """Run ``simulate`` once per seed (excitation ``make_excitation(seed)``) and combine:
+    in ``workers`` local processes (None: the CPU count, at most one per seed; 1: in this
+    process) or on the Dask scheduler ``scheduler`` (an address or distributed.Client; see
+    nlbeam.pool). The members are the same wherever they run. make_excitation must be
+    picklable (a module-level function) unless everything runs here. ``processes``: the
+    former name of ``workers`` (deprecated). Other keywords go to :func:`simulate`."""
     import inspect
     import pickle
 
+    from nlbeam.pool import Pool
+
+    if processes is not None:
+        processes = integer("processes", processes, 1, 4096)
+        warnings.warn("ensemble: processes= is deprecated; use workers= (the same meaning)",
+                      DeprecationWarning, stacklevel=2)
+        if workers is not None and workers != processes:
+            raise ValueError(f"workers: {workers!r} and processes: {processes!r} disagree; "
+                             "give workers only")
+        workers = processes
     if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__iter__"):
         raise ArgumentTypeError(f"seeds: must be a list of non-negative integers, got {seeds!r}")
     seeds = [integer("seeds", s, 0) for s in seeds]
-    if processes is not None:
-        processes = integer("processes", processes, 1, 4096)
+    if workers is not None:
+        workers = integer("workers", workers, 1, 4096)
     if not callable(make_excitation):
         raise ArgumentTypeError(f"make_excitation: must be a callable seed -> excitation, got "
                                 f"{type(make_excitation).__name__}")
@@ -779,14 +793,14 @@ def ensemble(model, make_excitation, seeds, duration, *, processes=None,
         if k not in names:
             from nlbeam._validate import keywords
 
-            keywords("ensemble", {k: None}, names + ["processes"])
-    if processes != 1 and len(seeds) > 1:
+            keywords("ensemble", {k: None}, names + ["workers", "scheduler", "processes"])
+    if (workers != 1 or scheduler is not None) and len(seeds) > 1:
         try:
             pickle.dumps(make_excitation)
         except Exception as exc:
             raise ArgumentTypeError(f"make_excitation: cannot be sent to the worker processes "
                                     f"({type(exc).__name__}: {exc}); define it at module level "
-                                    "(not a lambda or a local function), or pass processes=1") \
+                                    "(not a lambda or a local function), or pass workers=1") \
                 from None
     if len(seeds) < 1:
         raise ValueError("seeds: give at least one seed")
@@ -794,11 +808,10 @@ def ensemble(model, make_excitation, seeds, duration, *, processes=None,
         raise ValueError("seeds: must be distinct")
     kwargs["duration"] = duration
     jobs = [(model, make_excitation, s, kwargs) for s in seeds]
-    if processes == 1 or len(seeds) == 1:
-        members = [_member(j) for j in jobs]
-    else:
-        from concurrent.futures import ProcessPoolExecutor
-
-        with ProcessPoolExecutor(max_workers=processes) as pool:
-            members = list(pool.map(_member, jobs))
+    if scheduler is None and len(seeds) == 1:
+        workers = 1
+    elif scheduler is None and workers is None:
+        workers = min(len(seeds), os.cpu_count() or 1)
+    with Pool(workers, scheduler) as pool:
+        members = pool.map(_member, jobs)
     return EnsembleResult(seeds=seeds, members=members)

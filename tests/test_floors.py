@@ -48,6 +48,9 @@ UPWARD = (
      "BifurcationCurve.save and continuation.load_curves delegate to the HDF5 file floor"),
     ("continuation.chart", "nlbeam.app.files.curves_hdf5", "function",
      "StabilityChart.save delegates to the HDF5 file floor"),
+    ("nlbeam.pool", "nlbeam.app.sweeps", "function",
+     "Pool(scheduler=...) connects through the application floor's Dask client (dask is "
+     "imported on the top floor only)"),
 )
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import time
 import warnings
 
 _UNITS = ("Units: displacements and amplitudes in m (1e-4 = 0.1 mm), frequencies in Hz, "
@@ -128,6 +129,7 @@ def _frc(args):
     import continuation
 
     _check_out(args, "out", "plot")
+    _check_workers(args)
     log = _log(args)
     _check_knobs(args, "periodic")
     model = _model(args)
@@ -139,6 +141,7 @@ def _frc(args):
     frc = continuation.frequency_response(model, args.amplitude, tuple(args.f_range),
                                           orders=tuple(args.orders), stability=args.stability,
                                           progress=lambda msg: log(f"nlbeam frc:   {msg}"),
+                                          workers=args.workers, scheduler=args.scheduler,
                                           **kw)
     frc.save(args.out)
     log(f"nlbeam frc: {len(frc.branches)} branches, {frc.n_points} points, "
@@ -234,14 +237,73 @@ def _refine(args):
     return 0
 
 
+def _noise(band, lowpass, amplitudes, level, seed):
+    """The command line's excitation for one seed (module level: sent to workers)."""
+    import stochastic
+
+    return stochastic.BandLimitedNoise(band=band, seed=seed, lowpass=lowpass,
+                                       amplitudes=amplitudes, **level)
+
+
+def _member_path(out, seed):
+    """OUT with '-seed<N>' before its extension: the file of one member of --seeds."""
+    stem, ext = os.path.splitext(out)
+    return f"{stem}-seed{seed}{ext or '.h5'}"
+
+
+def _ensemble(args, model, log, level, sim_kw):
+    """simulate --seeds: one record per seed (in parallel), each saved beside OUT, and the
+    moments over the members with their standard errors."""
+    import functools
+
+    import stochastic
+
+    if any(s < 0 for s in args.seeds) or len(set(args.seeds)) != len(args.seeds):
+        raise ValueError(f"--seeds: must be distinct integers >= 0, got {args.seeds}")
+    if args.plot:
+        raise ValueError("--plot: not available with --seeds (plot a member file with "
+                         "nlbeam compare, or run one seed)")
+    make = functools.partial(_noise, tuple(args.band), args.lowpass, args.amplitudes, level)
+    t = time.perf_counter()
+    ens = stochastic.ensemble(model, make, args.seeds, args.duration, workers=args.workers,
+                              scheduler=args.scheduler, **sim_kw)
+    for seed, res in zip(args.seeds, ens.members):
+        res.save(_member_path(args.out, seed))
+    log(f"nlbeam simulate: {len(ens.members)} seeds in {time.perf_counter() - t:.1f} s -> "
+        f"{_member_path(args.out, '<N>')}")
+    if not args.quiet and len(ens.members) > 1:
+        from .plots.units import channel_unit, excitation_kind
+
+        kind = excitation_kind(ens.members[0].model_parameters)
+        for ch in ens.members[0].channels:
+            mo = ens.moments(ch)
+            u = channel_unit(ch, kind)[0]
+            print(f"{ch:6s} over {mo['n_members']} seeds: mean {mo['mean']:+.4e} +- "
+                  f"{mo['se_mean']:.1e} {u}  std {mo['std']:.4e} +- {mo['se_std']:.1e} {u}  "
+                  f"skewness {mo['skewness']:+.3f} +- {mo['se_skewness']:.3f}  kurtosis "
+                  f"{mo['kurtosis']:.3f} +- {mo['se_kurtosis']:.3f}")
+    return 0
+
+
 def _simulate(args):
     _check_out(args, "out", "plot")
     import stochastic
 
+    _check_workers(args)
     log = _log(args)
     _check_knobs(args, "stochastic")
     model = _model(args)
     level = {"rms": args.rms} if args.psd_level is None else {"psd_level": args.psd_level}
+    if args.seeds is not None:
+        keep = None if args.history is None else tuple(args.history)
+        return _ensemble(args, model, log, level, dict(
+            transient=args.transient, keep_history=keep, channels=tuple(args.channels),
+            method=args.method, psd_resolution=args.psd_resolution, pdf_bins=args.pdf_bins,
+            rtol=args.rtol, atol=args.atol, dt=args.dt,
+            steps_per_contact=args.steps_per_contact))
+    if args.workers is not None or args.scheduler is not None:
+        raise ValueError("--workers/--scheduler: one record runs in one process; give --seeds "
+                         "for several records in parallel")
     noise = stochastic.BandLimitedNoise(band=tuple(args.band), seed=args.seed,
                                         lowpass=args.lowpass, amplitudes=args.amplitudes,
                                         **level)
@@ -456,6 +518,13 @@ def _parser():
                         help="no progress and no results; warnings and errors still go to stderr")
     sub = parser.add_subparsers(dest="command", required=True)
 
+    def parallel_opts(p, what, default):
+        p.add_argument("--workers", type=int, default=None,
+                       help=f"local processes for the {what} (default {default})")
+        p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help=f"run the {what} on this Dask scheduler, e.g. tcp://host:8786 "
+                       "(pip install 'nlbeam[distributed]')")
+
     p = sub.add_parser("demo", parents=[common], help="a short version of `nlbeam figures`: "
                        "every kind of figure and table on a small diagram and 10 s records "
                        f"({DEMO_DURATION} once the kernels are compiled)",
@@ -528,6 +597,8 @@ def _parser():
                    help="Floquet multipliers of every point (needed for period doublings and "
                    "solid/dashed branches); default on")
     model_opts(p)
+    parallel_opts(p, "brute-force sweeps, branches and error estimates (the same diagram)",
+                  "1: this process")
     p.add_argument("--out", default="frc.h5", help="HDF5 result file, default frc.h5")
     p.add_argument("--plot", default=None, help="also write the diagram (PNG/PDF/SVG)")
     p.set_defaults(func=_frc)
@@ -593,6 +664,11 @@ def _parser():
                    help=f"any of {', '.join(CHANNELS)} (delta: penetration x - y, m; force: N); "
                    f"default {_shown(SIMULATE_CHANNELS)}")
     model_opts(p)
+    p.add_argument("--seeds", type=int, nargs="+", default=None,
+                   help="several records, one per seed (distinct integers >= 0; replaces "
+                   "--seed), each written to OUT with -seed<N> before the extension; prints "
+                   "the moments over them with standard errors")
+    parallel_opts(p, "records of --seeds", "the CPU count, at most one per seed")
     p.add_argument("--out", default="stochastic.h5", help="HDF5 result file, default stochastic.h5")
     p.add_argument("--plot", default=None, help="also write the PSDs (PNG/PDF/SVG)")
     p.add_argument("--f-max", type=float, default=None,

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["run_jobs", "PARAMETERS", "BAND_EDGES"]
+__all__ = ["run_jobs", "dask_client", "PARAMETERS", "BAND_EDGES"]
 
 #: sweepable scene parameters -> (section, key): the excitation's and the record's, and the
 #: paper beam's; the model's of other kinds come from the scene's [model]
@@ -41,7 +41,10 @@ PARAMETERS = {
 BAND_EDGES = {"band[0]": ("stochastic", "band", 0), "band[1]": ("stochastic", "band", 1)}
 
 
-def _client(scheduler, timeout):
+def dask_client(scheduler, timeout):
+    """(client, owned): a distributed.Client for ``scheduler`` (an address, or a Client
+    given, then owned False); RuntimeError naming ``scheduler`` when Dask is missing or the
+    scheduler cannot be reached in ``timeout`` s (also used by nlbeam.pool)."""
     try:
         from distributed import Client
     except ImportError:
@@ -68,7 +71,7 @@ def run_jobs(func, items, *, workers=None, scheduler=None, progress=None, connec
     if n == 0:
         return []
     if scheduler is not None:
-        client, own = _client(scheduler, connect_timeout)
+        client, own = dask_client(scheduler, connect_timeout)
         try:
             from distributed import as_completed
 

@@ -2,6 +2,7 @@
 --help states units, a failure gives exit status 2 and a one-line cause."""
 import os
 
+import numpy as np
 import pytest
 
 from nlbeam.cli import main
@@ -166,3 +167,36 @@ def test_a_warning_is_one_line_naming_the_command(tmp_path, capsys, monkeypatch)
                  "--n-grid", "2", "--out", out, "--quiet", "--accuracy", "off"]) == 0
     err = capsys.readouterr().err.splitlines()
     assert err == ["nlbeam frc: warning: continuation: a branch ended early; try segments=4"]
+
+
+def test_workers_and_seeds_give_what_one_process_gives(tmp_path, capsys):
+    """frc --workers 2: the diagram of one process; simulate --seeds on 2 workers: each member
+    is the record of --seed with that seed; --workers without --seeds is refused."""
+    import continuation
+    import stochastic
+
+    one, two = str(tmp_path / "one.h5"), str(tmp_path / "two.h5")
+    args = ["frc", "--amplitude", "1e-4", "--f-range", "42", "45", "--orders", "1",
+            "--n-grid", "3", "--accuracy", "off", "--quiet"]
+    assert main(args + ["--out", one]) == 0
+    assert main(args + ["--out", two, "--workers", "2"]) == 0
+    a, b = continuation.load(one), continuation.load(two)
+    assert [len(x.values) for x in a.branches] == [len(x.values) for x in b.branches]
+    for x, y in zip(a.branches, b.branches):
+        assert np.allclose(x.xmax, y.xmax, rtol=1e-12, atol=0)
+    sim = ["simulate", "--band", "0", "100", "--duration", "2", "--transient", "0.1",
+           "--psd-resolution", "2", "--channels", "delta"]
+    assert main(sim + ["--seeds", "3", "4", "--workers", "2", "--out",
+                       str(tmp_path / "s.h5")]) == 0
+    out = capsys.readouterr().out
+    assert "delta  over 2 seeds: mean" in out and "+-" in out
+    assert main(sim + ["--seed", "4", "--quiet", "--out", str(tmp_path / "single.h5")]) == 0
+    member = stochastic.load(str(tmp_path / "s-seed4.h5"))
+    single = stochastic.load(str(tmp_path / "single.h5"))
+    assert np.array_equal(member.psd("delta")[1], single.psd("delta")[1])
+    assert (tmp_path / "s-seed3.h5").exists()
+    capsys.readouterr()
+    assert main(sim + ["--workers", "2", "--out", str(tmp_path / "x.h5")]) == 2
+    assert "--workers/--scheduler" in capsys.readouterr().err
+    assert main(sim + ["--seeds", "1", "1", "--out", str(tmp_path / "x.h5")]) == 2
+    assert "--seeds: must be distinct" in capsys.readouterr().err

@@ -19,7 +19,7 @@ import continuation
 import stochastic
 from continuation.diagram import Bifurcation, Branch, FrequencyResponse
 from nlbeam.app.files import atomic, remove_stale_temporaries
-from nlbeam.app.files.keys import _CODE, code_fingerprint
+from nlbeam.app.files.keys import _CODE, analysis_fingerprint, code_fingerprint
 from nlbeam.app.files.stamped_hdf5 import (LegacyResultWarning, NewerWriterWarning,
                                            ResultFileError)
 from stochastic.simulate import StochasticResult
@@ -339,6 +339,32 @@ def test_the_code_fingerprint_follows_the_source(tmp_path, monkeypatch):
     _CODE.clear()
     assert a != b and code_fingerprint(("fakepkg_ft",)) == a
     assert len(code_fingerprint()) == 16
+    # a file left out (as the drawing code is left out of the analyses' keys) changes nothing
+    (pkg / "plots").mkdir()
+    (pkg / "plots" / "draw.py").write_text("y = 1\n")
+    _CODE.clear()
+    c = code_fingerprint(("fakepkg_ft",), exclude=("fakepkg_ft/plots",))
+    assert c == a != code_fingerprint(("fakepkg_ft",))
+    (pkg / "plots" / "draw.py").write_text("y = 2\n")
+    _CODE.clear()
+    assert code_fingerprint(("fakepkg_ft",), exclude=("fakepkg_ft/plots",)) == a
+    (pkg / "__init__.py").write_text("x = 3\n")
+    _CODE.clear()
+    assert code_fingerprint(("fakepkg_ft",), exclude=("fakepkg_ft/plots",)) != a
+    _CODE.clear()
+
+
+def test_each_analysis_is_keyed_by_the_code_it_runs():
+    from nlbeam.app.files.keys import ANALYSIS_CODE
+
+    per, sto = ANALYSIS_CODE["periodic"], ANALYSIS_CODE["stochastic"]
+    assert "stochastic" not in per[0] and "continuation" not in sto[0]
+    assert "nlbeam" in per[0] and "nlbeam" in sto[0]
+    # the scene code that builds the model and runs the analyses stays in both keys
+    for pkgs, excl in (per, sto):
+        assert not any(x.startswith("nlbeam/app/scenes/run") or x.startswith("nlbeam/_kernels")
+                       or x in ("nlbeam/app", "nlbeam", "nlbeam/app/scenes") for x in excl)
+    assert analysis_fingerprint("periodic") != analysis_fingerprint("stochastic")
 
 
 SCENE = """
@@ -379,7 +405,8 @@ def test_the_cache_refuses_swapped_truncated_and_empty_entries(tmp_path, monkeyp
     from nlbeam.app.scenes.run import run_scene, store_result
 
     scene, job = _scene_job(tmp_path, SCENE, "a.toml")
-    assert job.inputs["code"] == code_fingerprint() and not job.cached and not job.problem
+    assert job.inputs["code"] == analysis_fingerprint("stochastic")
+    assert not job.cached and not job.problem
     store_result(job, _sto())
     (job,) = plan(scene, tmp_path / "out")
     assert job.cached and not job.problem

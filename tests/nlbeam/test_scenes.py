@@ -354,3 +354,39 @@ def test_progress_lines_when_not_a_terminal(tmp_path):
     p.bar("sim", 0.5, 2.0, "s")
     end_bar_line()
     assert bar.getvalue().endswith("(25 %)\x1b[K\n")
+
+
+def test_a_cached_rerun_draws_only_what_changed(tmp_path, monkeypatch):
+    """Outputs are stamped with what they show: a rerun of an unchanged scene draws nothing and
+    reads no result; a changed figure entry redraws that figure only; a new seed redraws
+    what reads the stochastic result; a deleted or altered file is written again."""
+    from nlbeam.app.scenes import outputs, run
+
+    text = STOCH + PSD_FIG + '[[figure]]\nkind = "pdf"\nfile = "pdf.png"\n' \
+        + '[[table]]\nkind = "moments"\nfile = "moments.csv"\n'
+    scene = _write(tmp_path, text)
+    out = tmp_path / "out"
+    run_scene(scene, out, quiet=True)
+    drawn, loads = [], []
+    fig0, load0 = outputs.scene_figure, run.load_result
+    monkeypatch.setattr(outputs, "scene_figure",
+                        lambda t, d, v, o, **kw: drawn.append(d["file"]) or fig0(t, d, v, o, **kw))
+    monkeypatch.setattr(run, "load_result", lambda j: loads.append(j.kind) or load0(j))
+    rep = run_scene(scene, out, quiet=True)
+    assert drawn == [] and loads == []
+    assert sorted(os.path.basename(f) for f in rep.files) == ["moments.csv", "pdf.png",
+                                                             "psd.png"]
+    scene.write_text(text.replace('file = "pdf.png"', 'file = "pdf.png"\ntitle = "other"'))
+    run_scene(scene, out, quiet=True)
+    assert drawn == ["pdf.png"]
+    (out / "psd.png").write_bytes(b"not a figure")
+    run_scene(scene, out, quiet=True)
+    assert drawn == ["pdf.png", "psd.png"] and (out / "psd.png").stat().st_size > 1000
+    os.remove(out / "moments.csv")
+    run_scene(scene, out, quiet=True)
+    assert (out / "moments.csv").exists() and drawn == ["pdf.png", "psd.png"]
+    moments = (out / "moments.csv").read_text()
+    scene.write_text(text.replace("seed = 1", "seed = 2"))
+    run_scene(scene, out, quiet=True)
+    assert drawn == ["pdf.png", "psd.png", "psd.png", "pdf.png"]
+    assert (out / "moments.csv").read_text() != moments

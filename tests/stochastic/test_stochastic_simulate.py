@@ -167,15 +167,36 @@ def _make(seed):
 def test_ensemble_combines_members_and_is_reproducible():
     kw = dict(transient=0.5, psd_resolution=2.0, channels=("delta",))
     model = nlbeam.BeamImpact(K_hertz=0.0)
-    ens = st.ensemble(model, _make, [1, 2, 3], 2.0, processes=2, **kw)
-    again = st.ensemble(model, _make, [1, 2, 3], 2.0, processes=1, **kw)
+    ens = st.ensemble(model, _make, [1, 2, 3], 2.0, workers=2, **kw)
+    again = st.ensemble(model, _make, [1, 2, 3], 2.0, workers=1, **kw)
     for a, b in zip(ens.members, again.members):
         assert np.array_equal(a.psd("delta")[1], b.psd("delta")[1])
+    with pytest.warns(DeprecationWarning, match="workers"):  # the former name still works
+        old = st.ensemble(model, _make, [1, 2], 2.0, processes=1, **kw)
+    assert np.array_equal(old.members[1].psd("delta")[1], again.members[1].psd("delta")[1])
+    with pytest.raises(ValueError, match="^workers"):
+        st.ensemble(model, _make, [1, 2], 2.0, workers=0, **kw)
     f, mean, lo, hi = ens.psd("delta")
     assert np.all(lo <= mean) and np.all(mean <= hi)
     mo = ens.moments("delta")
     assert mo["ci95_std"][0] <= mo["std"] <= mo["ci95_std"][1]
     assert ens.members[0].seed == 1
+
+
+def test_ensemble_on_a_dask_cluster_gives_the_members_of_this_process():
+    pytest.importorskip("distributed")
+    from distributed import LocalCluster
+
+    kw = dict(transient=0.5, psd_resolution=2.0, channels=("delta",))
+    model = nlbeam.BeamImpact(K_hertz=0.0)
+    here = st.ensemble(model, _make, [4, 5], 2.0, workers=1, **kw)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      host="127.0.0.1", dashboard_address=None) as cluster:
+        there = st.ensemble(model, _make, [4, 5], 2.0, scheduler=cluster.scheduler_address,
+                            **kw)
+    for a, b in zip(here.members, there.members):
+        assert np.array_equal(a.psd("delta")[1], b.psd("delta")[1])
+        assert a.moments("delta") == b.moments("delta")
 
 
 @pytest.mark.parametrize("kwargs, name", [

@@ -7,7 +7,8 @@ import hashlib
 import json
 import math
 
-__all__ = ["canonical_json", "content_key", "code_fingerprint"]
+__all__ = ["canonical_json", "content_key", "code_fingerprint", "analysis_fingerprint",
+           "ANALYSIS_CODE"]
 
 
 def _plain(v):
@@ -42,16 +43,18 @@ def content_key(obj, length=16) -> str:
 _CODE = {}
 
 
-def code_fingerprint(packages=("nlbeam", "continuation", "stochastic")) -> str:
+def code_fingerprint(packages=("nlbeam", "continuation", "stochastic"), exclude=()) -> str:
     """Hex SHA-256 (16 digits) of the source of ``packages``: every ``.py`` file's path
-    (relative) and bytes, sorted. Changes whenever the code that computes a result changes,
-    unlike a hand-kept version string (cache keys use it). Packages are located, not
-    imported."""
+    (relative) and bytes, sorted, except those under ``exclude`` (paths such as
+    'nlbeam/app/plots' or 'nlbeam/app/cli.py'). Changes whenever the code that computes a
+    result changes, unlike a hand-kept version string (cache keys use it). Packages are
+    located, not imported."""
     import importlib.util
     import os
 
-    if packages in _CODE:
-        return _CODE[packages]
+    key = (tuple(packages), tuple(exclude))
+    if key in _CODE:
+        return _CODE[key]
     h = hashlib.sha256()
     for pkg in packages:
         spec = importlib.util.find_spec(pkg)
@@ -61,9 +64,33 @@ def code_fingerprint(packages=("nlbeam", "continuation", "stochastic")) -> str:
                 dirs[:] = sorted(x for x in dirs if x != "__pycache__")
                 files += [os.path.join(d, n) for n in names if n.endswith(".py")]
             for p in sorted(files):
-                h.update(f"{pkg}/{os.path.relpath(p, root)}\0".encode())
+                rel = f"{pkg}/{os.path.relpath(p, root)}".replace(os.sep, "/")
+                if any(rel == x or rel.startswith(x.rstrip("/") + "/") for x in exclude):
+                    continue
+                h.update(f"{rel}\0".encode())
                 with open(p, "rb") as fh:
                     h.update(fh.read())
                 h.update(b"\0")
-    _CODE[packages] = h.hexdigest()[:16]
-    return _CODE[packages]
+    _CODE[key] = h.hexdigest()[:16]
+    return _CODE[key]
+
+
+# the application floor's code that reads results but never computes them: the drawing, the
+# tables, the comparison of peaks, the command line, the scene outputs
+_READERS = ("nlbeam/app/plots", "nlbeam/app/cli.py", "nlbeam/app/demo.py",
+            "nlbeam/app/compare.py", "nlbeam/app/scenes/outputs.py",
+            "nlbeam/app/scenes/numbers.py")
+
+#: the source each analysis of a scene depends on: (packages, paths left out): an edit of
+#: the stochastic package keeps the cached diagrams, one of the plots keeps every result
+ANALYSIS_CODE = {
+    "periodic": (("nlbeam", "continuation"), _READERS),
+    "stochastic": (("nlbeam", "stochastic"), _READERS),
+    "chart": (("nlbeam", "continuation"), _READERS),
+}
+
+
+def analysis_fingerprint(kind) -> str:
+    """``code_fingerprint`` of the source the analysis ``kind`` ('periodic', 'stochastic')
+    depends on (``ANALYSIS_CODE``; 'chart' too)."""
+    return code_fingerprint(*ANALYSIS_CODE[kind])

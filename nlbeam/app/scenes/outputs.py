@@ -1,20 +1,30 @@
 """The outputs of a scene: its figures (drawn by nlbeam.app.plots.scene) and its CSV tables
 (moments, peaks, bifurcations), one per distinct set of the analyses each reads.
+
+An output is drawn again only when something it shows may have changed: each is stamped
+(``OUT/.nlbeam-cache/outputs.json``) with the SHA-256 of its [[figure]] / [[table]] entry,
+the scene title, the variants it shows with the checksums of the analysis results it reads,
+the source of the code and the matplotlib version, and with the checksum of each file
+written; an output whose stamp and files are unchanged is kept as it is (a scene with a
+measured record, and a stability chart, are always drawn).
 """
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
+import json
 import math
 import os
 
 from .. import defaults
 from ..compare import map_peaks
-from ..files import write_text_atomic
+from ..files import code_fingerprint, content_key, write_text_atomic
 from ..plots.scene import scene_figure
 from .bifurcation_list import bifurcation_rows
 from .chart_outputs import chart_figure, chart_table, chart_variants
 from .numbers import with_error
+from .plan import CACHE_DIR
 from .schema import CHART_OUTPUTS, build_model, default_f_max, excitation_for_peaks
 
 __all__ = ["write_outputs", "write_table", "distinct"]
@@ -80,34 +90,126 @@ def planned_files(scene, jobs, out_dir):
     return out
 
 
-def write_outputs(scene, jobs, results, out_dir, log):
-    """Write every figure and table of ``scene`` from ``results`` (cache path -> result) to
-    ``out_dir``; log each file. Returns the files written."""
-    variants = _by_variant(scene, jobs, results)
-    measured = None
-    if scene.measured is not None:
-        from .measured import measured_result
+def _sha256(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
 
-        measured = (scene.measured["label"],
-                    measured_result(scene.measured, dict(build_model(scene.model).parameters())))
-    files = []
-    swept = None
-    if scene.sweep is not None:
-        values = dict(zip((v[0] for v in variants), scene.sweep["values"]))
-        swept = (*scene.swept, values)
-    for d in scene.figures:
-        if d["kind"] in CHART_OUTPUTS:
-            files += chart_figure(scene.title, d, chart_variants(scene, jobs, results), out_dir)
-            continue
-        files += scene_figure(scene.title, d, distinct(d["kind"], variants), out_dir,
-                              measured=measured)
-    for d in scene.tables:
-        if d["kind"] in CHART_OUTPUTS:
-            files.append(chart_table(d, chart_variants(scene, jobs, results), out_dir))
-            continue
-        files.append(write_table(d, variants, out_dir, measured=measured, swept=swept))
-    for f in files:
-        log(f"nlbeam: wrote {f}")
+
+def _result_sha(path):
+    """The checksum of a cached result recorded beside it (its .json), or None."""
+    try:
+        with open(path[:-3] + ".json", encoding="utf-8") as fh:
+            return json.loads(fh.read())["result_sha256"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+
+
+def _stamp(scene, d, jobs):
+    """The content key of everything output ``d`` shows (module doc); None when a result's
+    checksum is unknown (then it is drawn)."""
+    import matplotlib
+
+    light = [(label, m, p, s, None, None, {
+        k: next((j.path for j in jobs if j.kind == k and j.variant == label), None)
+        for k in ("periodic", "stochastic")}) for label, m, p, s in scene.variants()]
+    shown = []
+    for label, m, p, s, _, _, paths in distinct(d["kind"], light):
+        sums = {a: _result_sha(paths[a]) for a in _READS[d["kind"]] if paths[a]}
+        if any(v is None for v in sums.values()):
+            return None
+        shown.append([label, m, p, s, sums])
+    return content_key({"output": d, "title": scene.title, "shown": shown,
+                        "code": code_fingerprint(), "matplotlib": matplotlib.__version__},
+                       length=32)
+
+
+def _record_path(out_dir):
+    return os.path.join(out_dir, CACHE_DIR, "outputs.json")
+
+
+def _read_record(out_dir):
+    try:
+        with open(_record_path(out_dir), encoding="utf-8") as fh:
+            rec = json.loads(fh.read())
+        return rec if isinstance(rec, dict) else {}
+    except (OSError, ValueError):
+        return {}
+
+
+def _up_to_date(entry, stamp, out_dir):
+    """The files of an output recorded with this stamp, all present and unchanged (else
+    None)."""
+    if stamp is None or not isinstance(entry, dict) or entry.get("stamp") != stamp:
+        return None
+    files = entry.get("files")
+    if not isinstance(files, dict) or not files:
+        return None
+    paths = []
+    for name, sha in files.items():
+        path = os.path.join(out_dir, name)
+        try:
+            if _sha256(path) != sha:
+                return None
+        except OSError:
+            return None
+        paths.append(path)
+    return paths
+
+
+def write_outputs(scene, jobs, results, out_dir, log, load=None):
+    """Write the figures and tables of ``scene`` to ``out_dir`` from ``results`` (cache path
+    -> result; a result missing there is read with ``load(job)``), except those whose files
+    are up to date (module doc); log each file written. Returns all the scene's output files
+    (written or kept)."""
+    out_dir = os.fspath(out_dir)
+    record = _read_record(out_dir)
+    todo, files, kept = [], [], 0
+    for kind, d in [("figure", d) for d in scene.figures] + [("table", d) for d in scene.tables]:
+        stamp = (None if scene.measured is not None or d["kind"] in CHART_OUTPUTS
+                 else _stamp(scene, d, jobs))
+        have = _up_to_date(record.get(d["file"]), stamp, out_dir)
+        if have is None:
+            todo.append((kind, d, stamp))
+        else:
+            files += have
+            kept += len(have)
+    if todo:
+        for j in jobs:
+            if j.path not in results:
+                results[j.path] = load(j)
+        variants = _by_variant(scene, jobs, results)
+        measured = None
+        if scene.measured is not None:
+            from .measured import measured_result
+
+            measured = (scene.measured["label"], measured_result(
+                scene.measured, dict(build_model(scene.model).parameters())))
+        swept = None
+        if scene.sweep is not None:
+            values = dict(zip((v[0] for v in variants), scene.sweep["values"]))
+            swept = (*scene.swept, values)
+        for kind, d, stamp in todo:
+            if d["kind"] in CHART_OUTPUTS:
+                cv = chart_variants(scene, jobs, results)
+                new = (chart_figure(scene.title, d, cv, out_dir) if kind == "figure"
+                       else [chart_table(d, cv, out_dir)])
+            elif kind == "figure":
+                new = scene_figure(scene.title, d, distinct(d["kind"], variants), out_dir,
+                                   measured=measured)
+            else:
+                new = [write_table(d, variants, out_dir, measured=measured, swept=swept)]
+            for f in new:
+                log(f"nlbeam: wrote {f}")
+            files += new
+            record[d["file"]] = {"stamp": stamp, "files": {
+                os.path.relpath(f, out_dir): _sha256(f) for f in new}}
+        os.makedirs(os.path.dirname(_record_path(out_dir)), exist_ok=True)
+        write_text_atomic(_record_path(out_dir), json.dumps(record, indent=1, sort_keys=True))
+    if kept:
+        log(f"nlbeam: {kept} file(s) up to date, kept")
     return files
 
 

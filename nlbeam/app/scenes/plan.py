@@ -11,8 +11,9 @@ only the channels, estimators and history the outputs read.
 
 Cache: ``OUT/.nlbeam-cache/<analysis>-<key>.h5`` where key = SHA-256 of the canonical JSON
 of the analysis' inputs (model, its section with defaults filled in, the channels / outputs
-/ history it must produce) and the code fingerprint (SHA-256 of the packages' source,
-``files.code_fingerprint``: results of other code are never reused). A sidecar ``.json``
+/ history it must produce) and the code fingerprint (SHA-256 of the source the analysis
+depends on, ``files.keys.analysis_fingerprint``: results of other code are never reused;
+an edit of the drawing code or of the other analysis' package keeps them). A sidecar ``.json``
 records the inputs and the SHA-256 of the result file; ``check_entry`` verifies both and
 the file's own checksums, so an entry that is corrupted, truncated, empty or another
 result swapped in is marked for recomputation (``Job.problem`` says why).
@@ -25,7 +26,8 @@ import os
 from dataclasses import dataclass
 
 from .. import defaults
-from ..files import canonical_json, code_fingerprint, content_key
+from ..files import canonical_json, content_key
+from ..files.keys import analysis_fingerprint
 from .models import model_inputs
 from .schema import CHART_OUTPUTS, history_channels, history_window
 
@@ -106,14 +108,15 @@ def plan(scene, out_dir):
         if need_p:
             p = dict(p, stability=stability)
             inputs = {"analysis": "periodic", "model": m, "periodic": p,
-                      "code": code_fingerprint()}
+                      "code": analysis_fingerprint("periodic")}
             jobs.append(_job("periodic", label, inputs, cache,
                              f"frequency response {p['f_range'][0]:g}-{p['f_range'][1]:g} Hz, "
                              f"A = {p['amplitude']:g} m, orders {p['orders']}"
                              f"{'' if stability else ', no stability'}"))
         if need_chart:
             c = scene.chart
-            inputs = {"analysis": "chart", "model": m, "chart": c, "code": code_fingerprint()}
+            inputs = {"analysis": "chart", "model": m, "chart": c,
+                      "code": analysis_fingerprint("chart")}
             jobs.append(_job("chart", label, inputs, cache,
                              f"stability chart {c['f_range'][0]:g}-{c['f_range'][1]:g} Hz, "
                              f"A = {c['p_range'][0]:g}-{c['p_range'][1]:g} m, orders "
@@ -123,7 +126,7 @@ def plan(scene, out_dir):
             outputs = sorted(set().union(*chans.values())) if chans else []
             inputs = {"analysis": "stochastic", "model": m, "stochastic": s,
                       "channels": channels, "outputs": outputs, "history": hist,
-                      "code": code_fingerprint()}
+                      "code": analysis_fingerprint("stochastic")}
             under = (f"the record {os.path.basename(s['record'])} ({s['record_column']})"
                      if "record" in s else f"band {s['band'][0]:g}-{s['band'][1]:g} Hz")
             jobs.append(_job("stochastic", label, inputs, cache,

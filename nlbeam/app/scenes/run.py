@@ -48,6 +48,8 @@ def compute(job_inputs):
         kw.setdefault("stability", True)
         if job_inputs.get("_progress") is not None:
             kw["progress"] = job_inputs["_progress"]
+        if job_inputs.get("_parallel") is not None:  # (workers, scheduler): the same diagram
+            kw["workers"], kw["scheduler"] = job_inputs["_parallel"]
         return continuation.frequency_response(
             model, p["amplitude"], tuple(p["f_range"]), orders=tuple(p["orders"]), **kw)
     if kind == "chart":
@@ -266,15 +268,14 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
                     f"nlbeam:   [{n}/{len(todo)}] simulated", done, total, "s"))
             elif j.kind in ("periodic", "chart") and not quiet:
                 inputs["_progress"] = lambda msg: show(f"nlbeam:   {msg}")
+            if j.kind == "periodic":  # its branches on the workers (not sweep points)
+                inputs["_parallel"] = (workers, scheduler)
             t = time.perf_counter()
             r, warned = compute_recorded(inputs)
             show.close()
             store_result(j, r, log, warned)
             results[j.path] = r
             log(f"nlbeam:   done in {time.perf_counter() - t:.1f} s")
-    for j in jobs:
-        if j.path not in results:
-            results[j.path] = load_result(j)
-    files = write_outputs(scene, jobs, results, out_dir, log)
+    files = write_outputs(scene, jobs, results, out_dir, log, load_result)
     return RunReport(jobs=jobs, computed=len(todo), files=files,
                      wall_time=time.perf_counter() - t0)
