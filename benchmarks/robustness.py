@@ -118,7 +118,7 @@ def report(name, make, quick):
     print(f"  branch ends where the tracer gave up: {len(ends)}"
           + (" (" + ", ".join(f"branch {i}: {e}" for i, e in ends) + ")" if ends else ""))
     retraced = [i for i in range(len(frc.branches)) if _turns_without_fold(frc, i)]
-    print(f"  branches that turn back in frequency more often than they have folds: "
+    print(f"  branches that turn back in frequency away from a fold or period doubling: "
           f"{len(retraced)}" + (f" (branches {retraced})" if retraced else ""))
     print(f"  ContinuationWarnings: {len(texts)}"
           + "".join(f"\n    - {t[:200]}" for t in texts))
@@ -147,11 +147,13 @@ def _digits(err, f):
     return f"{d.min():.1f}-{d.max():.1f} (median {np.median(d):.1f})"
 
 
-def _turns_without_fold(frc, i, noise=1e-6):
+def _turns_without_fold(frc, i, noise=1e-6, near=1e-4):
     """How many times branch i reverses direction in frequency (by more than ``noise``
-    relative: near sticking contacts the points wiggle at the 1e-7 level) beyond the folds
-    located on it (smooth or at a grazing corner): a retrace when > 0."""
-    turns, ext, sgn = 0, None, 0.0
+    relative: near sticking contacts the points wiggle at the 1e-7 level) where no fold of
+    that branch (smooth or at a grazing corner) and no period doubling (a switched branch
+    passes through the period doubling it starts or ends at, where it turns in frequency) lies
+    within ``near`` (relative): a retrace when > 0."""
+    turns, ext, sgn = [], None, 0.0
     for v in map(float, frc.branches[i].frequency):
         if ext is None:
             ext = v
@@ -162,10 +164,11 @@ def _turns_without_fold(frc, i, noise=1e-6):
         elif (v - ext) * sgn > 0:
             ext = v
         elif abs(v - ext) > noise * abs(ext):
-            turns += 1
+            turns.append(ext)
             sgn, ext = -sgn, v
-    folds = sum(b.kind == "fold" and b.branch == i for b in frc.bifurcations)
-    return max(0, turns - folds)
+    marks = [b.frequency for b in frc.bifurcations
+             if (b.kind == "fold" and b.branch == i) or b.kind == "period-doubling"]
+    return sum(not any(abs(t - m) <= near * abs(t) for m in marks) for t in turns)
 
 
 def main(argv=None):
