@@ -1,7 +1,13 @@
 """Helpers shared by the test modules (``from helpers import ...``: conftest.py registers this
 file as the module ``helpers``). No test module imports another; what two of them need lives
 here, each helper group in its own section."""
+import contextlib
+import os
+import shutil
+import subprocess
+
 import numpy as np
+import pytest
 import scipy.optimize
 from numba import njit
 
@@ -150,3 +156,29 @@ class KernelCall:
 def cubic_force(t, x, v, y, yd, params, out):
     """The Duffing spring -k3 x^3 on DOF 0 as a custom force, k3 = params[0]."""
     out[0] -= params[0] * x[0] ** 3
+
+
+@contextlib.contextmanager
+def read_only_folder(path):
+    """A folder nobody can write into, at ``path`` (created): mode 0555 for a normal user;
+    for root (who writes through modes) a read-only tmpfs mounted there, the test skipped
+    only where mounting is impossible. Restored on exit."""
+    os.makedirs(path, exist_ok=True)
+    if os.geteuid() != 0:
+        os.chmod(path, 0o555)
+        try:
+            yield path
+        finally:
+            os.chmod(path, 0o755)
+        return
+    if shutil.which("mount") is None:
+        pytest.skip("root writes into read-only folders and there is no mount command")
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=64k", "tmpfs", str(path)],
+                       capture_output=True)
+    if r.returncode:
+        pytest.skip(f"root writes into read-only folders; cannot mount a read-only tmpfs: "
+                    f"{r.stderr.decode().strip()}")
+    try:
+        yield path
+    finally:
+        subprocess.run(["umount", str(path)], check=True)

@@ -1,6 +1,5 @@
 """Output paths and figure titles are checked before any analysis starts (CLI, scenes), and
 simulate checks the Nyquist frequency for every excitation."""
-import os
 import time
 
 import numpy as np
@@ -9,6 +8,7 @@ import pytest
 import continuation
 import nlbeam
 import stochastic
+from helpers import read_only_folder
 from nlbeam._validate import output_file
 from nlbeam.app.cli import main
 from nlbeam.scenes import run_scene
@@ -39,16 +39,10 @@ def test_output_file_under_a_file_is_refused(tmp_path):
     assert output_file("out", str(tmp_path / "new" / "r.h5")).endswith("r.h5")
 
 
-@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
 def test_read_only_folder_is_refused(tmp_path):
-    ro = tmp_path / "ro"
-    ro.mkdir()
-    ro.chmod(0o500)
-    try:
+    with read_only_folder(tmp_path / "ro") as ro:
         with pytest.raises(ValueError, match="not writable"):
             output_file("out", str(ro / "r.h5"))
-    finally:
-        ro.chmod(0o700)
 
 
 def test_scene_with_bad_math_title_fails_before_any_analysis(tmp_path, monkeypatch):
