@@ -5,26 +5,10 @@ import os
 import numpy as np
 import pytest
 
+from helpers import MOMENTS_TABLE, PSD_FIGURE, TINY_STOCHASTIC
 from nlbeam.cli import main
 
-SCENE = """
-title = "tiny"
-[stochastic]
-band = [0.0, 100.0]
-rms = 1e-4
-seed = 1
-duration = 1.5
-transient = 0.1
-psd_resolution = 2.0
-
-[[figure]]
-kind = "psd"
-file = "psd.png"
-
-[[table]]
-kind = "moments"
-file = "moments.csv"
-"""
+SCENE = '\ntitle = "tiny"' + TINY_STOCHASTIC + PSD_FIGURE + MOMENTS_TABLE
 
 
 DEMO_FILES = ["demo.toml", "demo_bifurcations.csv", "demo_compare_1.png", "demo_compare_2.png",
