@@ -94,6 +94,15 @@ def test_failure_is_one_line_and_exit_2(tmp_path, capsys):
     assert "cannot read" in capsys.readouterr().err
 
 
+def test_frc_without_a_grid_is_refused_before_any_work(tmp_path, capsys):
+    # issue 18: `nlbeam frc --n-grid 0` exited 0 with a diagram of no branch
+    out = tmp_path / "frc.h5"
+    assert main(["frc", "--f-range", "40", "41", "--n-grid", "0", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--n-grid" in err[0] and "got 0" in err[0]
+    assert not out.exists()
+
+
 def test_frc_simulate_compare(tmp_path, capsys):
     frc, sto, png = (str(tmp_path / n) for n in ("frc.h5", "sto.h5", "cmp.png"))
     assert main(["frc", "--amplitude", "1e-4", "--f-range", "42", "45", "--orders", "1",
