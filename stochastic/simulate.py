@@ -287,13 +287,14 @@ def _warn_short_record(excitation, duration):
     if band is None:
         return
     width = float(band[1]) - float(band[0])
-    if width * duration < 1.0:
+    if width > 0 and width * duration < 1.0:  # (a single line, width 0, is no noise)
         tc = 1.0 / width
         warnings.warn(f"duration: {duration:.6g} s is shorter than the excitation's correlation "
                       f"time 1 / band width = {tc:.6g} s: the statistics describe one "
                       f"quasi-static stretch of the noise, not its distribution; give "
                       f"duration >= {tc:.6g} s (a mean square then errs by about "
-                      "1 / sqrt(band width x duration)) or a wider band", RuntimeWarning, stacklevel=3)
+                      "1 / sqrt(band width x duration)) or a wider band", RuntimeWarning,
+                      stacklevel=3)
 
 
 def _default_resolution(duration):

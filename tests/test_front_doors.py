@@ -370,7 +370,8 @@ def test_memory_budgets_name_block_duration_and_psd_resolution(monkeypatch):
     # the 2.2 GiB block synthesis (block_duration=1e6 s) and 47.7 GiB of Welch
     # segments (psd_resolution=1e-6 Hz) under a stated budget of 1 GB
     monkeypatch.setenv("NLBEAM_MEMORY_BUDGET", "1e9")
-    with pytest.raises(BudgetError, match=r"^block synthesis: .*needs about [0-9.]+ [GT]iB.*block_duration"):
+    with pytest.raises(BudgetError,
+                       match=r"^block synthesis: .*needs about [0-9.]+ [GT]iB.*block_duration"):
         stochastic.BandLimitedNoise((0.0, 100.0), rms=1e-4, seed=1, block_duration=1e6)
     with pytest.raises(BudgetError, match=r"^psd_resolution: .*needs about [0-9.]+ [GT]iB"):
         stochastic.simulate(M, NOISE, duration=1.0, transient=0.1, psd_resolution=1e-6)

@@ -97,8 +97,8 @@ def test_rerun_computes_nothing_and_a_new_seed_recomputes_only_the_stochastic_pa
 
 
 def test_dry_run_plans_without_work(tmp_path, calls):
-    scene = write_scene(tmp_path, PERIODIC + STOCH + '[[figure]]\nkind = "history"\nfile = "h.png"\n'
-                   'window = [0.0, 0.2]\nchannels = ["y", "x"]\n')
+    scene = write_scene(tmp_path, PERIODIC + STOCH + '[[figure]]\nkind = "history"\n'
+                        'file = "h.png"\nwindow = [0.0, 0.2]\nchannels = ["y", "x"]\n')
     rep = run_scene(scene, tmp_path / "out", dry_run=True)
     assert calls == {"frc": 0, "sim": 0}
     assert not (tmp_path / "out").exists()
