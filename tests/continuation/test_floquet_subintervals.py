@@ -6,6 +6,8 @@ period and the multipliers are taken from the product of their transition matric
 Exact answer: a linear system x'' + C x' + K x = F cos(w t) integrated by RK4 at a fixed step
 h has the discrete monodromy R(A h)^n, R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24, whose
 multipliers are R(lambda h)^n for the eigenvalues lambda of A = [[0, I], [-K, -C]] (M = I)."""
+import warnings
+
 import numpy as np
 import pytest
 
@@ -89,3 +91,27 @@ def test_piece_monodromies_multiply_to_the_monodromy_through_contacts(law):
         for Fj in Fs:
             P = Fj @ P
         assert np.max(np.abs(P - M)) < 1e-8 * np.max(np.abs(M))
+
+
+def test_an_impacting_orbit_keeps_a_multiplier_1e45_below_the_largest():
+    # an overdamped oscillator (zeta = 3) with a one-sided stop (exact_pwl), impacting once per
+    # 4 s period: multipliers -1.2e-10 and -2.7e-56. The exact reference's formed product
+    # loses the small one too, but the damping c is the same on both sides of the stop, so
+    # mu1 mu2 = det M = exp(-c T / m) exactly (Liouville): mu2 = exp(-c T / m) / mu1
+    from exact_pwl import StopOscillator, orbit
+
+    osc = StopOscillator.tuned(fn=1.0, zeta=3.0, ratio=100.0, gap=0.005, amplitude=1.0)
+    f = 0.25
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # few steps per contact
+        sol = C.periodic_solution(osc.system(), osc.amplitude, f,
+                                  integrator=Integrator().refined(2), error=False)
+    ex = orbit(osc, f, sol.state0)
+    assert ex.n_impacts == 1
+    det = np.exp(-osc.c / osc.m / f)
+    mu1 = ex.multipliers[0].real
+    exact = np.array([mu1, det / mu1])
+    assert abs(exact[0] / exact[1]) > 1e40
+    assert np.max(np.abs(sol.multipliers - exact) / np.abs(exact)) < 1e-3  # measured 5.6e-5
+    plain = np.linalg.eigvals(sol.monodromy)
+    assert np.min(np.abs(plain)) < 1e-3 * abs(exact[1])  # one matrix: 0.0
