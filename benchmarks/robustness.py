@@ -23,6 +23,7 @@ import numpy as np
 import nlbeam
 
 import continuation as C
+from continuation.turns import turns
 
 GAVE_UP = ("stuck at a corner", "step underflow", "no progress", "max_points",
            "could not move the segment boundaries")
@@ -153,22 +154,10 @@ def _turns_without_fold(frc, i, noise=1e-6, near=1e-4):
     that branch (smooth or at a grazing corner) and no period doubling (a switched branch
     passes through the period doubling it starts or ends at, where it turns in frequency) lies
     within ``near`` (relative): a retrace when > 0."""
-    turns, ext, sgn = [], None, 0.0
-    for v in map(float, frc.branches[i].frequency):
-        if ext is None:
-            ext = v
-        elif sgn == 0.0:
-            if abs(v - ext) > noise * abs(ext):
-                sgn = np.sign(v - ext)
-                ext = v
-        elif (v - ext) * sgn > 0:
-            ext = v
-        elif abs(v - ext) > noise * abs(ext):
-            turns.append(ext)
-            sgn, ext = -sgn, v
     marks = [b.frequency for b in frc.bifurcations
              if (b.kind == "fold" and b.branch == i) or b.kind == "period-doubling"]
-    return sum(not any(abs(t - m) <= near * abs(t) for m in marks) for t in turns)
+    return sum(not any(abs(t - m) <= near * abs(t) for m in marks)
+               for t in turns(frc.branches[i].frequency, noise))
 
 
 def main(argv=None):

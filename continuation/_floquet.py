@@ -10,13 +10,28 @@ and block-diagonal up to round-off. Setting C's off-diagonal blocks to zero pert
 factor by about eps, which moves each multiplier by about eps times itself (not eps |mu_max|);
 the k leading multipliers are those of C_11 R_11, the others those of the shorter product
 C_22 R_m,22 ... R_1,22, deflated again.
+
+Each factor still costs the small multipliers about eps times its own spread (the ratio of
+its largest to its smallest growth), so a product of few factors over a large spread is not
+enough either: ``multipliers`` asks for a product of more factors, over shorter sub-intervals
+of the period (``subdivide``), until every factor spreads by at most about FACTOR_SPREAD.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 #: the formed product is used unless its largest multiplier exceeds this times its smallest
 SPREAD = 1e8
+#: the spread one factor of the product form may carry: the smallest multiplier then keeps
+#: about eps * FACTOR_SPREAD * (number of factors) relative (1e-11 with 256 factors)
+FACTOR_SPREAD = 100.0
+#: the most factors (sub-intervals of the period) asked for: enough for a spread of 1e512
+MAX_FACTORS = 256
+#: at most this many rounds of subdividing: each round's multipliers give the next round's
+#: spread (the first, from the formed product, stops near 1/eps)
+ROUNDS = 4
 
 
 def _dominant_basis(M):
@@ -62,19 +77,57 @@ def product_eigenvalues(Ms):
     return np.concatenate([mu_lead, product_eigenvalues(rest)])
 
 
-def multipliers(Ms, M=None):
+def factors_needed(spread):
+    """The number of factors (sub-intervals of the period) that keep every multiplier of a
+    product whose multipliers spread by ``spread`` (largest / smallest modulus) to about
+    eps * FACTOR_SPREAD relative: each factor then spreads by at most FACTOR_SPREAD."""
+    if not spread > SPREAD:
+        return 1
+    if not math.isfinite(spread):
+        return MAX_FACTORS
+    return min(MAX_FACTORS, math.ceil(math.log(spread) / math.log(FACTOR_SPREAD)))
+
+
+def _spread(mu):
+    a = np.abs(mu)
+    if not np.all(np.isfinite(a)):
+        return None
+    return a.max() / a.min() if a.min() > 0 else math.inf
+
+
+def _sorted(mu):
+    if np.all(mu.imag == 0):
+        mu = mu.real
+    return mu[np.argsort(-np.abs(mu), kind="stable")]
+
+
+def multipliers(Ms, M=None, subdivide=None):
     """Floquet multipliers (sorted by modulus, largest first) of the segment monodromies Ms
-    (M: their product, if formed already): the eigenvalues of the formed product, unless
-    there are several segments and the largest modulus exceeds SPREAD times the smallest;
-    then ``product_eigenvalues``."""
+    (M: their product, if formed already): the eigenvalues of the formed product, unless the
+    largest modulus exceeds SPREAD times the smallest; then ``product_eigenvalues`` of a
+    product of Ms (several segments), then, while the spread those multipliers show needs
+    more than ``factors_needed(spread)`` factors, of ``subdivide(k)`` (a callable: the
+    transition matrices of the same orbit over k sub-intervals of each segment, in order)
+    with k raised to what the spread needs (at most ROUNDS rounds; without ``subdivide``,
+    Ms alone)."""
     if M is None:
         M = np.eye(Ms[0].shape[0])
         for Mj in Ms:
             M = Mj @ M
     mu = np.linalg.eigvals(M)
-    a = np.abs(mu)
-    if len(Ms) > 1 and np.all(np.isfinite(a)) and not a.max() <= SPREAD * a.min():
+    spread = _spread(mu)
+    if spread is None or not spread > SPREAD:
+        return mu[np.argsort(-np.abs(mu), kind="stable")]
+    m = len(Ms)
+    if m > 1:
         mu = product_eigenvalues(list(Ms))
-        if np.all(mu.imag == 0):
-            mu = mu.real
-    return mu[np.argsort(-np.abs(mu), kind="stable")]
+        spread = _spread(mu)
+    pieces = 1
+    for _ in range(ROUNDS):
+        need = factors_needed(spread) if spread is not None else 1
+        if subdivide is None or need <= m * pieces or m * pieces >= MAX_FACTORS:
+            break
+        pieces = max(pieces + 1, math.ceil(need / m))
+        mu = product_eigenvalues(list(subdivide(pieces)))
+        spread = _spread(mu)
+    return _sorted(mu)

@@ -275,7 +275,45 @@ class ShootingProblem(Problem):
                                                 newton=True).state - fl.state) / h
                 Ms.append(M)
         self.last_impacts = n_imp
+        if var:
+            Ms = SegmentMonodromies(Ms, U.copy(), p)
         return ends, Ms, xm
+
+    def piece_monodromies(self, U, p, pieces):
+        """The transition matrices (2N, 2N) of the orbit through the segment starts U (m, 2N)
+        at parameter p over (at most) ``pieces`` sub-intervals of whole steps of each
+        segment, in order; their product is the monodromy up to round-off. Each piece is
+        flowed from the end of the one before with identity sensitivities. A piece never ends
+        inside a contact (the steps there depend on where the contact began): one that would
+        is flowed again to the next cut. The first piece of a segment that starts in contact
+        chains the start-in-contact rule as ``_map`` does. The adaptive method's pieces are
+        equal spans."""
+        model, ex = self.forcing(p)
+        f = ex.frequency
+        G = Solver.start_contact_derivative(model)
+        fm = self._flowmap(model, ex)
+        out = []
+        for j, phase0, dphi in self._segments():
+            dur = dphi / f
+            if self.steps_per_period:
+                dt = phase_step(dur, self.steps_per_period * dphi)
+                n = max(1, int(round(dur / dt)))
+            else:  # adaptive: the output spacing is the piece
+                n = pieces
+                dt = dur / n
+            cuts = np.unique(np.rint(np.linspace(0, n, min(pieces, n) + 1)).astype(int))
+            s, disc, a = U[j], None, 0
+            for b in cuts[1:]:
+                fl = fm(s, phase0 / f + dur * a / n, dur * (b - a) / n, monodromy=True,
+                        disc0=disc, dt=dt, max_steps=int(50 * (b - a)) + 20000)
+                if b < n and np.any(fl.disc[:, 0] != 0):
+                    continue  # ends inside a contact: flow from a to the next cut instead
+                M = fl.monodromy
+                if fl.dstate_dvminus0 is not None:  # only a segment's start: see _map
+                    M = M + fl.dstate_dvminus0 @ G
+                out.append(M)
+                s, disc, a = fl.state, fl.disc, b
+        return out
 
     def evaluate(self, u, p, jac=True, jac_p=True):
         """Residual R (n,) of u (n,) at parameter p; with jac the Jacobian dR/du (n, n) and the
@@ -331,11 +369,16 @@ class ShootingProblem(Problem):
         return M
 
     def multipliers(self, Ms):
-        """Floquet multipliers, largest modulus first; in product form over the segments
+        """Floquet multipliers, largest modulus first; in product form over the segments, or
+        over sub-intervals of them (``piece_monodromies``: when Ms came from ``evaluate``),
         when their spread would cost the small ones their digits (continuation._floquet)."""
         from ._floquet import multipliers
 
-        return multipliers(Ms, self.monodromy(Ms))
+        start = getattr(Ms, "start", None)
+        if start is None:
+            return multipliers(Ms, self.monodromy(Ms))
+        return multipliers(Ms, self.monodromy(Ms),
+                           subdivide=functools.partial(self.piece_monodromies, *start))
 
     def boundary_clearance(self, u, p):
         model, ex = self.forcing(p)
@@ -519,6 +562,16 @@ class ShootingProblem(Problem):
                 fl = self.flow_phases(model, ex, U[j], b[j], target - b[j])
                 return fl.state, fl.disc
         return U[0].copy(), None
+
+
+class SegmentMonodromies(list):
+    """The segment monodromies [M_1, ..., M_m] of one evaluation, with the orbit they were
+    computed on: ``start`` = (U (m, 2N), p), the segment starts and the parameter (so that
+    the multipliers can be computed again over sub-intervals: Shooting.piece_monodromies)."""
+
+    def __init__(self, Ms, U, p):
+        super().__init__(Ms)
+        self.start = (U, p)
 
 
 @dataclass

@@ -80,12 +80,38 @@ def block_moments(x, out):
 
 
 @njit(cache=True)
+def bin_index(v, edges, nb, lo, w, uniform):
+    """The bin k of a value ``v`` inside [edges[0], edges[nb]] of nb bins (the last closed, as
+    np.histogram): for (nearly) uniform edges (lo = edges[0], width w) guessed from the width
+    and corrected against the edges themselves; otherwise found by bisection."""
+    if v == edges[nb]:
+        return nb - 1
+    if uniform:
+        k = int((v - lo) / w)
+        if k > nb - 1:
+            k = nb - 1
+        while k > 0 and v < edges[k]:
+            k -= 1
+        while k < nb - 1 and v >= edges[k + 1]:
+            k += 1
+        return k
+    k = 0
+    b = nb
+    while b - k > 1:
+        m = (k + b) // 2
+        if v >= edges[m]:
+            k = m
+        else:
+            b = m
+    return k
+
+
+@njit(cache=True)
 def histogram_count(x, edges, uniform, counts, outside):
     """Count ``x`` into the bins of increasing ``edges`` (last bin closed, as np.histogram).
 
-    ``counts`` (n_bins,) and ``outside`` ([below, above]) are incremented in place. For
-    (nearly) uniform edges the bin is guessed from the width and corrected against the
-    edges themselves; otherwise it is found by bisection.
+    ``counts`` (n_bins,) and ``outside`` ([below, above]) are incremented in place; the bin
+    of a value as :func:`bin_index`.
     """
     nb = counts.size
     lo = edges[0]
@@ -99,27 +125,8 @@ def histogram_count(x, edges, uniform, counts, outside):
             outside[0] += 1
         elif v > hi:
             outside[1] += 1
-        elif v == hi:
-            counts[nb - 1] += 1
         else:
-            if uniform:
-                k = int((v - lo) / w)
-                if k > nb - 1:
-                    k = nb - 1
-                while k > 0 and v < edges[k]:
-                    k -= 1
-                while k < nb - 1 and v >= edges[k + 1]:
-                    k += 1
-            else:
-                k = 0
-                b = nb
-                while b - k > 1:
-                    m = (k + b) // 2
-                    if v >= edges[m]:
-                        k = m
-                    else:
-                        b = m
-            counts[k] += 1
+            counts[bin_index(v, edges, nb, lo, w, uniform)] += 1
     return OK
 
 
@@ -209,25 +216,7 @@ def histogram_count_batches(x, edges, uniform, bc, row, fill, size, counts, outs
         elif v > hi:
             outside[1] += 1
         else:
-            if v == hi:
-                k = nb - 1
-            elif uniform:
-                k = int((v - lo) / w)
-                if k > nb - 1:
-                    k = nb - 1
-                while k > 0 and v < edges[k]:
-                    k -= 1
-                while k < nb - 1 and v >= edges[k + 1]:
-                    k += 1
-            else:
-                k = 0
-                b = nb
-                while b - k > 1:
-                    m = (k + b) // 2
-                    if v >= edges[m]:
-                        k = m
-                    else:
-                        b = m
+            k = bin_index(v, edges, nb, lo, w, uniform)
             counts[k] += 1
             bc[row, k] += 1
         fill += 1

@@ -278,6 +278,25 @@ def _check_nyquist(excitation, dt, store_every):
                          f"aliased frequency); use dt * store_every < {0.5 / f_max:.6g} s")
 
 
+def _warn_short_record(excitation, duration):
+    """RuntimeWarning when the record (duration, s) is shorter than the correlation time of a
+    noise, 1 / its band's width (s): its statistics then describe one quasi-static stretch of
+    the noise (a band of (0, 1e-3) Hz over 10 s: a nearly constant input), not its
+    distribution."""
+    band = getattr(excitation, "band", None)
+    if band is None:
+        return
+    width = float(band[1]) - float(band[0])
+    if width > 0 and width * duration < 1.0:  # (a single line, width 0, is no noise)
+        tc = 1.0 / width
+        warnings.warn(f"duration: {duration:.6g} s is shorter than the excitation's correlation "
+                      f"time 1 / band width = {tc:.6g} s: the statistics describe one "
+                      f"quasi-static stretch of the noise, not its distribution; give "
+                      f"duration >= {tc:.6g} s (a mean square then errs by about "
+                      "1 / sqrt(band width x duration)) or a wider band", RuntimeWarning,
+                      stacklevel=3)
+
+
 def _default_resolution(duration):
     # >= ~31 Welch averages (50 % overlap), never finer than 0.05 Hz
     return max(0.05, 16.0 / duration)
@@ -398,6 +417,7 @@ def simulate(model, excitation, duration, transient=None, outputs=OUTPUTS, chann
     if n_keep < 2 * store_every:
         raise ValueError(f"duration: must span at least 2 samples "
                          f"(>= {2 * dt * store_every:.3g} s)")
+    _warn_short_record(excitation, duration)
     n_total = n_tr + n_keep
     t_total_end = t0 + n_total * dt
     hi = excitation.time_span()[1]

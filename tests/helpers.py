@@ -182,3 +182,34 @@ def read_only_folder(path):
         yield path
     finally:
         subprocess.run(["umount", str(path)], check=True)
+
+
+# --- scenes -------------------------------------------------------------------------------------
+#: a tiny stochastic analysis (a 1.5 s record of a 0-100 Hz noise), the scene tests' base
+TINY_STOCHASTIC = """
+[stochastic]
+band = [0.0, 100.0]
+rms = 1e-4
+seed = 1
+duration = 1.5
+transient = 0.1
+psd_resolution = 2.0
+"""
+#: a PSD figure and a moments table of it
+PSD_FIGURE = """
+[[figure]]
+kind = "psd"
+file = "psd.png"
+"""
+MOMENTS_TABLE = """
+[[table]]
+kind = "moments"
+file = "moments.csv"
+"""
+
+
+def write_scene(folder, text, name="scene.toml"):
+    """The scene file ``name`` in ``folder`` (a pathlib.Path) holding ``text``; its path."""
+    p = folder / name
+    p.write_text(text)
+    return p

@@ -112,6 +112,12 @@ def _noise_factory(seed):
     return stochastic.BandLimitedNoise((0.0, 100.0), rms=1e-4, seed=seed)
 
 
+def _psd_negative_between_probes(f):
+    """A PSD (m^2/Hz) on (0, 100) Hz positive at the 1001 points 0.1 Hz apart that a PSD
+    callable is first probed at, negative (down to -5e-10) between them."""
+    return 1e-9 * (1.0 - 1.5 * np.sin(np.pi * np.asarray(f) / 0.1) ** 2)
+
+
 NAN, INF = math.nan, math.inf
 # (front door, argument named in the message, keyword overrides)
 CASES = [
@@ -244,6 +250,7 @@ CASES = [
     ("SpectralNoise", "psd", {"psd": {"f": [0, 100], "G": [1, 1]}}),
     ("SpectralNoise", "psd", {"psd": lambda f: 1 / 0}),
     ("SpectralNoise", "psd", {"psd": lambda f: np.cos(f)}),
+    ("SpectralNoise", "psd", {"psd": _psd_negative_between_probes}),
     ("Recorded", "h", {"h": 0.5}), ("Recorded", "bc_type", {"bc_type": "bogus"}),
     ("Recorded", "t", {"t": "abc"}),
     ("simulate", "duration", {"duration": "10"}), ("simulate", "duration", {"duration": -1.0}),
@@ -257,11 +264,14 @@ CASES = [
     ("simulate", "max_samples", {"excitation": stochastic.BandLimitedNoise(
         (0.0, 1e6), rms=1e-4, seed=1, block_duration=1e-3), "duration": 10.0}),
     ("simulate", "psd_resolution", {"psd_resolution": 0.0}),
+    ("simulate", "psd_resolution", {"psd_resolution": 1e-6}),  # 48 GB of Welch segments
     ("simulate", "store_every", {"store_every": 0}),
     ("simulate", "pdf_bins", {"pdf_bins": 0}),
     ("simulate", "progress", {"progress": "yes"}),
     ("ensemble", "processes", {"processes": 0}),
     ("ensemble", "make_excitation", {"make_excitation": lambda s: NOISE}),
+    ("ensemble", "make_excitation", {"make_excitation": lambda s: _noise_factory(s),
+                                     "workers": 2}),
     ("ensemble", "stabilty", {"stabilty": 1}),
     ("ensemble", "seeds", {"seeds": ["a"]}),
     # comparison, plots, loaders
@@ -354,3 +364,27 @@ def test_budgets_state_the_estimate_and_the_knob():
 
 def test_argument_type_error_is_both_kinds():
     assert issubclass(ArgumentTypeError, TypeError) and issubclass(ArgumentTypeError, ValueError)
+
+
+def test_memory_budgets_name_block_duration_and_psd_resolution(monkeypatch):
+    # the issue's 2.2 GiB block synthesis (block_duration=1e6 s) and 47.7 GiB of Welch
+    # segments (psd_resolution=1e-6 Hz) under a stated budget of 1 GB
+    monkeypatch.setenv("NLBEAM_MEMORY_BUDGET", "1e9")
+    with pytest.raises(BudgetError,
+                       match=r"^block synthesis: .*needs about [0-9.]+ [GT]iB.*block_duration"):
+        stochastic.BandLimitedNoise((0.0, 100.0), rms=1e-4, seed=1, block_duration=1e6)
+    with pytest.raises(BudgetError, match=r"^psd_resolution: .*needs about [0-9.]+ [GT]iB"):
+        stochastic.simulate(M, NOISE, duration=1.0, transient=0.1, psd_resolution=1e-6)
+
+
+def test_a_record_shorter_than_the_noise_correlation_time_warns():
+    # a band of (0, 1e-3) Hz varies over 1000 s: 1 s of it is one quasi-static stretch
+    slow = stochastic.BandLimitedNoise((0.0, 1e-3), rms=1e-4, seed=1)
+    with pytest.warns(RuntimeWarning, match=r"duration: 1 s is shorter than the excitation's "
+                                            r"correlation time 1 / band width = 1000 s"):
+        stochastic.simulate(M, slow, duration=1.0, transient=0.1, outputs=("moments",))
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("error", message=".*correlation time")
+        stochastic.simulate(M, NOISE, duration=1.0, transient=0.1, outputs=("moments",))

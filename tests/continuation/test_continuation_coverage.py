@@ -20,24 +20,14 @@ import nlbeam
 from continuation.diagram import _polish
 from continuation.pathfollow import Tracer
 from continuation.shooting import Integrator, _problem_from_state
+from continuation.turns import turns
 
 
-def _turns(values, noise=1e-6):
-    """Parameter values where the branch reverses: extrema from which it moves back by more
-    than ``noise`` (relative; where contacts nearly stick the fixed-step map has noise, and the
-    points wiggle in p at the 1e-7 level)."""
-    out, ext, sgn = [], float(values[0]), 0.0
-    for v in map(float, values[1:]):
-        if sgn == 0.0:
-            if abs(v - ext) > noise * abs(ext):
-                sgn = np.sign(v - ext)
-                ext = v
-        elif (v - ext) * sgn > 0:
-            ext = v
-        elif abs(v - ext) > noise * abs(ext):
-            out.append(ext)
-            sgn, ext = -sgn, v
-    return out
+def test_turns_are_the_extrema_left_by_more_than_the_noise():
+    # 2 and 1.5 are left by 0.5 and 1.5; the last step back (1e-7) is below noise * 3
+    assert turns([0.0, 1.0, 2.0, 1.5, 3.0, 2.9999999]) == [2.0, 1.5]
+    assert turns([5.0, 4.0, 4.0000001, 3.0]) == []
+    assert turns([1.0, 2.0, 1.0], noise=2.0) == []
 
 
 def _assert_turns_at_folds(values, folds, rel):
@@ -45,7 +35,7 @@ def _assert_turns_at_folds(values, folds, rel):
     of the fold's value, or of the branch's steps there): no stretch is traced twice except
     through folds."""
     free = sorted(folds)
-    for x in _turns(values):
+    for x in turns(values):
         near = [f for f in free if abs(f - x) <= rel * abs(x)]
         assert near, f"the branch turns back at {x:.9g} without a fold (folds: {free})"
         free.remove(min(near, key=lambda f: abs(f - x)))
@@ -95,7 +85,7 @@ def test_paper_model_at_02mm_covers_10_to_120_hz_once(paper_2e4):
     # corner, or the smooth one of the 4-impact orbits just past it, 11.70 Hz with the map's
     # exact derivative), and the branch's turn near the corner is at it (checked above)
     assert any(b.kind == "fold" and abs(b.frequency - 11.69) < 3e-2 for b in frc.bifurcations)
-    assert any(_turns(b.values) and any(abs(t - 11.69) < 3e-2 for t in _turns(b.values))
+    assert any(turns(b.values) and any(abs(t - 11.69) < 3e-2 for t in turns(b.values))
                for b in frc.branches)
     assert not any("not covered" in m for m in msgs), msgs
 
@@ -149,7 +139,7 @@ def test_duffing_with_stop_branch_from_any_start_passes_its_corner(f0, ds):
     assert reason == "left the parameter range" and pts[-1].p > 3.0 and pts[-1].xmax < 0.5
     _assert_turns_at_folds(np.array([q.p for q in pts]),
                            [L.point.p for L in loc if L.kind == "fold"], 5e-3)
-    assert len(_turns([q.p for q in pts])) == 2
+    assert len(turns([q.p for q in pts])) == 2
 
 
 def test_two_dof_amplitude_continuation_reaches_the_lower_limit():
@@ -167,7 +157,7 @@ def test_two_dof_amplitude_continuation_reaches_the_lower_limit():
     assert b.values.min() < 2e-5 and b.values.max() > 3e-4
     assert sorted(b.ends) == ["left the parameter range"] * 2
     _assert_turns_at_folds(b.values, _branch_folds(frc, 0), 5e-3)
-    assert len(_turns(b.values)) == 2
+    assert len(turns(b.values)) == 2
     assert any(g.kind == "grazing" and abs(g.value - 3.6e-5) < 1e-7 for g in frc.bifurcations)
 
 

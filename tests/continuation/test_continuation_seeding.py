@@ -130,6 +130,23 @@ def test_paper_model_grid_at_low_frequency_finds_the_harmonic_orbit():
         assert abs(sol.xmax - ref.xmax) < 1e-9 * ref.xmax
 
 
+def test_a_range_with_no_periodic_attractor_says_so():
+    """Issue 18: 500-1000 Hz (n_grid 5) returned 0 branches without a word. There the
+    integration reaches no periodic attractor and shooting does not converge either (at 750 Hz:
+    residual 9e-2 after 15 iterations): an empty diagram must come with the grid's verdict and
+    the uncovered range."""
+    m = nlbeam.BeamImpact.paper()
+    with pytest.raises(C.ConvergenceError):
+        C.periodic_solution(m, 1e-4, 750.0, error=False)
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        frc = C.frequency_response(m, 1e-4, (500.0, 1000.0), orders=(1,), n_grid=5)
+    text = [str(x.message) for x in w if issubclass(x.category, C.ContinuationWarning)]
+    assert not frc.branches
+    assert any("no periodic attractor" in t and "750 Hz: not periodic" in t for t in text)
+    assert any("not covered: order 1: 500-1000 Hz (no branch)" in t for t in text)
+
+
 @pytest.mark.slow
 def test_paper_model_at_low_frequency_finds_the_harmonic_branch():
     m = nlbeam.BeamImpact.paper()

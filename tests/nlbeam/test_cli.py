@@ -5,26 +5,10 @@ import os
 import numpy as np
 import pytest
 
+from helpers import MOMENTS_TABLE, PSD_FIGURE, TINY_STOCHASTIC
 from nlbeam.cli import main
 
-SCENE = """
-title = "tiny"
-[stochastic]
-band = [0.0, 100.0]
-rms = 1e-4
-seed = 1
-duration = 1.5
-transient = 0.1
-psd_resolution = 2.0
-
-[[figure]]
-kind = "psd"
-file = "psd.png"
-
-[[table]]
-kind = "moments"
-file = "moments.csv"
-"""
+SCENE = '\ntitle = "tiny"' + TINY_STOCHASTIC + PSD_FIGURE + MOMENTS_TABLE
 
 
 DEMO_FILES = ["demo.toml", "demo_bifurcations.csv", "demo_compare_1.png", "demo_compare_2.png",
@@ -108,6 +92,15 @@ def test_failure_is_one_line_and_exit_2(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
     assert main(["run", str(tmp_path / "missing.toml")]) == 2
     assert "cannot read" in capsys.readouterr().err
+
+
+def test_frc_without_a_grid_is_refused_before_any_work(tmp_path, capsys):
+    # issue 18: `nlbeam frc --n-grid 0` exited 0 with a diagram of no branch
+    out = tmp_path / "frc.h5"
+    assert main(["frc", "--f-range", "40", "41", "--n-grid", "0", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--n-grid" in err[0] and "got 0" in err[0]
+    assert not out.exists()
 
 
 def test_frc_simulate_compare(tmp_path, capsys):

@@ -18,6 +18,7 @@ import pytest
 import continuation
 import stochastic
 from continuation.diagram import Bifurcation, Branch, FrequencyResponse
+from helpers import PSD_FIGURE, TINY_STOCHASTIC, write_scene
 from nlbeam.app.files import atomic, remove_stale_temporaries
 from nlbeam.app.files.keys import _CODE, analysis_fingerprint, code_fingerprint
 from nlbeam.app.files.stamped_hdf5 import (LegacyResultWarning, NewerWriterWarning,
@@ -226,8 +227,12 @@ def test_a_write_failing_half_way_leaves_nothing_and_raises_one_line(tmp_path, m
 
 
 _CHILD = """
-import os, sys
+import importlib.util, os, sys
 import numpy as np
+# tests/helpers.py as the module "helpers" (as conftest.py registers it), then this file
+spec = importlib.util.spec_from_file_location("helpers", {helpers!r})
+sys.modules["helpers"] = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(sys.modules["helpers"])
 sys.path.insert(0, {tests!r})
 from test_files_trust import _HalfWriter, _sto
 from nlbeam.app.files import atomic
@@ -252,7 +257,9 @@ except OSError as err:
 def test_a_failed_save_does_not_crash_the_interpreter(tmp_path, mode):
     folder = tmp_path / "out"
     folder.mkdir()
-    code = _CHILD.format(tests=os.path.dirname(__file__), mode=mode, folder=str(folder))
+    here = os.path.dirname(os.path.abspath(__file__))
+    code = _CHILD.format(tests=here, helpers=os.path.join(os.path.dirname(here), "helpers.py"),
+                         mode=mode, folder=str(folder))
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                        timeout=120, cwd=ROOT)
     assert r.returncode == 0, r.stderr[-2000:]
@@ -362,27 +369,13 @@ def test_each_analysis_is_keyed_by_the_code_it_runs():
     assert analysis_fingerprint("periodic") != analysis_fingerprint("stochastic")
 
 
-SCENE = """
-[stochastic]
-band = [0.0, 100.0]
-rms = 1e-4
-seed = 1
-duration = 1.5
-transient = 0.1
-psd_resolution = 2.0
-
-[[figure]]
-kind = "psd"
-file = "psd.png"
-"""
+SCENE = TINY_STOCHASTIC + PSD_FIGURE
 
 
 def _scene_job(tmp_path, text, name):
     from nlbeam.app.scenes import load_scene, plan
 
-    p = tmp_path / name
-    p.write_text(text)
-    scene = load_scene(p)
+    scene = load_scene(write_scene(tmp_path, text, name))
     (job,) = plan(scene, tmp_path / "out")
     return scene, job
 

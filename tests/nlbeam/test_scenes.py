@@ -16,17 +16,10 @@ import pytest
 
 import continuation
 import stochastic
+from helpers import PSD_FIGURE, TINY_STOCHASTIC, write_scene
 from nlbeam.scenes import SceneError, load_scene, plan, run_scene
 
-STOCH = """
-[stochastic]
-band = [0.0, 100.0]
-rms = 1e-4
-seed = 1
-duration = 1.5
-transient = 0.1
-psd_resolution = 2.0
-"""
+STOCH = TINY_STOCHASTIC
 PERIODIC = """
 [periodic]
 amplitude = 1e-4
@@ -34,11 +27,7 @@ f_range = [42.0, 45.0]
 orders = [1]
 n_grid = 3
 """
-PSD_FIG = """
-[[figure]]
-kind = "psd"
-file = "psd.png"
-"""
+PSD_FIG = PSD_FIGURE
 
 
 @pytest.fixture
@@ -61,18 +50,12 @@ def calls(monkeypatch):
     return n
 
 
-def _write(tmp_path, text, name="scene.toml"):
-    p = tmp_path / name
-    p.write_text(text)
-    return p
-
-
 def _files(d):
     return sorted(os.path.relpath(os.path.join(r, f), d) for r, _, fs in os.walk(d) for f in fs)
 
 
 def test_psd_only_scene_runs_no_continuation_and_stores_no_history(tmp_path, calls):
-    scene = _write(tmp_path, 'title = "psd only"\n' + PERIODIC + STOCH + PSD_FIG)
+    scene = write_scene(tmp_path, 'title = "psd only"\n' + PERIODIC + STOCH + PSD_FIG)
     out = tmp_path / "out"
     rep = run_scene(scene, out, quiet=True)
     assert calls == {"frc": 0, "sim": 1}
@@ -87,7 +70,7 @@ def test_psd_only_scene_runs_no_continuation_and_stores_no_history(tmp_path, cal
 def test_rerun_computes_nothing_and_a_new_seed_recomputes_only_the_stochastic_part(tmp_path, calls):
     text = PERIODIC + STOCH + PSD_FIG + '[[figure]]\nkind = "frc"\nfile = "frc.png"\n' \
         + '[[table]]\nkind = "peaks"\nfile = "peaks.csv"\n'
-    scene = _write(tmp_path, text)
+    scene = write_scene(tmp_path, text)
     out = tmp_path / "out"
     first = run_scene(scene, out, quiet=True)
     assert calls == {"frc": 1, "sim": 1} and first.computed == 2
@@ -114,8 +97,8 @@ def test_rerun_computes_nothing_and_a_new_seed_recomputes_only_the_stochastic_pa
 
 
 def test_dry_run_plans_without_work(tmp_path, calls):
-    scene = _write(tmp_path, PERIODIC + STOCH + '[[figure]]\nkind = "history"\nfile = "h.png"\n'
-                   'window = [0.0, 0.2]\nchannels = ["y", "x"]\n')
+    scene = write_scene(tmp_path, PERIODIC + STOCH + '[[figure]]\nkind = "history"\n'
+                        'file = "h.png"\nwindow = [0.0, 0.2]\nchannels = ["y", "x"]\n')
     rep = run_scene(scene, tmp_path / "out", dry_run=True)
     assert calls == {"frc": 0, "sim": 0}
     assert not (tmp_path / "out").exists()
@@ -141,7 +124,7 @@ BAD = [
 @pytest.mark.parametrize("text,key,line,what", BAD)
 def test_malformed_scene_fails_before_work_naming_key_and_line(tmp_path, calls, text, key,
                                                                line, what):
-    scene = _write(tmp_path, text)
+    scene = write_scene(tmp_path, text)
     out = tmp_path / "out"
     with pytest.raises(SceneError) as err:
         run_scene(scene, out, quiet=True)
@@ -158,7 +141,7 @@ def test_failed_analysis_leaves_no_output_file(tmp_path, monkeypatch):
         raise RuntimeError("integration failed")
 
     monkeypatch.setattr(stochastic, "simulate", boom)
-    scene = _write(tmp_path, STOCH + PSD_FIG)
+    scene = write_scene(tmp_path, STOCH + PSD_FIG)
     out = tmp_path / "out"
     with pytest.raises(RuntimeError, match="integration failed"):
         run_scene(scene, out, quiet=True)
@@ -186,7 +169,7 @@ def umask_027():
 
 def test_cache_and_outputs_get_the_usual_mode(tmp_path, umask_027):
     # results were written through tempfile.mkstemp (0600); now 0666 minus the umask
-    scene = _write(tmp_path, PERIODIC + STOCH + PSD_FIG + '[[table]]\nkind = "bifurcations"\n'
+    scene = write_scene(tmp_path, PERIODIC + STOCH + PSD_FIG + '[[table]]\nkind = "bifurcations"\n'
                    'file = "b.csv"\n')
     out = tmp_path / "out"
     run_scene(scene, out, quiet=True)
@@ -212,7 +195,7 @@ PEAKS_NO_STAB = '[[table]]\nkind = "peaks"\nfile = "peaks.csv"\nstability = fals
 def test_no_stability_where_none_is_shown(tmp_path, monkeypatch):
     seen = []
     monkeypatch.setattr(continuation, "frequency_response", _frc_with_stability(seen))
-    scene = _write(tmp_path, PERIODIC + STOCH + PEAKS_NO_STAB)
+    scene = write_scene(tmp_path, PERIODIC + STOCH + PEAKS_NO_STAB)
     out = tmp_path / "out"
     rep = run_scene(scene, out, quiet=True)
     assert seen == [False]
@@ -233,7 +216,7 @@ def test_no_stability_where_none_is_shown(tmp_path, monkeypatch):
 
 def test_stability_only_for_outputs_that_can_do_without(tmp_path, calls):
     text = PERIODIC + STOCH + '[[figure]]\nkind = "frc"\nfile = "f.png"\nstability = false\n'
-    scene = _write(tmp_path, text)
+    scene = write_scene(tmp_path, text)
     with pytest.raises(SceneError) as err:
         load_scene(scene)
     line = text.splitlines().index("stability = false") + 1
@@ -273,11 +256,11 @@ def test_peaks_table_stops_at_f_max(tmp_path):
 def test_a_default_written_out_keys_the_same_analysis(tmp_path):
     # paper_broadband.toml spells the paper's contact parameters out, paper_narrowband.toml
     # leaves them: both must find the one diagram in the cache
-    a = load_scene(_write(tmp_path, PERIODIC + PSD_FIG.replace("psd", "frc"), "a.toml"))
-    b = load_scene(_write(tmp_path, '[model]\ne = 0.5\nK_hertz = 2.1e8\ncontact = '
+    a = load_scene(write_scene(tmp_path, PERIODIC + PSD_FIG.replace("psd", "frc"), "a.toml"))
+    b = load_scene(write_scene(tmp_path, '[model]\ne = 0.5\nK_hertz = 2.1e8\ncontact = '
                           '"lankarani-nikravesh"\n' + PERIODIC + PSD_FIG.replace("psd", "frc"),
                           "b.toml"))
-    c = load_scene(_write(tmp_path, "[model]\ne = 0.6\n" + PERIODIC +
+    c = load_scene(write_scene(tmp_path, "[model]\ne = 0.6\n" + PERIODIC +
                           PSD_FIG.replace("psd", "frc"), "c.toml"))
     (ja,), (jb,), (jc,) = (plan(x, tmp_path) for x in (a, b, c))
     assert ja.key == jb.key != jc.key
@@ -285,7 +268,7 @@ def test_a_default_written_out_keys_the_same_analysis(tmp_path):
 
 
 def test_peaks_without_stability_on_the_real_continuation(tmp_path, calls):
-    scene = _write(tmp_path, PERIODIC + STOCH + PEAKS_NO_STAB +
+    scene = write_scene(tmp_path, PERIODIC + STOCH + PEAKS_NO_STAB +
                    '[[figure]]\nkind = "compare"\nfile = "c.png"\nstability = false\n')
     out = tmp_path / "out"
     rep = run_scene(scene, out, quiet=True)
@@ -312,7 +295,7 @@ def test_a_cached_rerun_repeats_the_warnings_of_the_computation(tmp_path, monkey
         return sim0(*a, **k)
 
     monkeypatch.setattr(stochastic, "simulate", sim)
-    scene = _write(tmp_path, STOCH + PSD_FIG)
+    scene = write_scene(tmp_path, STOCH + PSD_FIG)
     with pytest.warns(RuntimeWarning, match="record gained energy") as first:
         run_scene(scene, tmp_path / "out", quiet=True)
     assert [str(w.message) for w in first if "energy" in str(w.message)] == [
@@ -330,7 +313,7 @@ def test_progress_lines_when_not_a_terminal(tmp_path):
     import io
 
     from nlbeam.app.progress import Progress
-    scene = _write(tmp_path, PERIODIC + STOCH + PSD_FIG + '[[figure]]\nkind = "frc"\n'
+    scene = write_scene(tmp_path, PERIODIC + STOCH + PSD_FIG + '[[figure]]\nkind = "frc"\n'
                    'file = "frc.png"\n')
     buf = io.StringIO()
     run_scene(scene, tmp_path / "out", log=Progress(stream=buf))
@@ -339,7 +322,7 @@ def test_progress_lines_when_not_a_terminal(tmp_path):
     assert "simulated: 1.6 / 1.6 s" in text  # transient + duration, the last line
     assert "branch" in text or "brute-force" in text  # continuation's own status lines
     quiet = io.StringIO()
-    run_scene(_write(tmp_path, STOCH.replace("seed = 1", "seed = 2") + PSD_FIG, "q.toml"),
+    run_scene(write_scene(tmp_path, STOCH.replace("seed = 1", "seed = 2") + PSD_FIG, "q.toml"),
               tmp_path / "out", log=Progress(stream=quiet, quiet=True))
     assert quiet.getvalue() == ""
     bar = io.StringIO()
@@ -364,7 +347,7 @@ def test_a_cached_rerun_draws_only_what_changed(tmp_path, monkeypatch):
 
     text = STOCH + PSD_FIG + '[[figure]]\nkind = "pdf"\nfile = "pdf.png"\n' \
         + '[[table]]\nkind = "moments"\nfile = "moments.csv"\n'
-    scene = _write(tmp_path, text)
+    scene = write_scene(tmp_path, text)
     out = tmp_path / "out"
     run_scene(scene, out, quiet=True)
     drawn, loads = [], []

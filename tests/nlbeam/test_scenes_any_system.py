@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 import nlbeam
+from helpers import write_scene
 from nlbeam.app.cli import _parser, main
 from nlbeam.app.defaults import PERIODIC, STOCHASTIC
 from nlbeam.app.scenes import models, schema
@@ -97,12 +98,6 @@ channel = "x"
 """
 
 
-def _write(tmp_path, text, name="scene.toml"):
-    p = tmp_path / name
-    p.write_text(text)
-    return p
-
-
 @pytest.fixture
 def factory_module(tmp_path, monkeypatch):
     """A module on the path defining ``rig(gap, k_stop, scale)``; returns its name."""
@@ -135,7 +130,7 @@ def _end_to_end(scene_path, out):
 
 
 def test_a_system_written_out_runs_end_to_end_and_is_cached(tmp_path):
-    scene = _write(tmp_path, RIG_TOML.format(gap=5e-4) + ANALYSES)
+    scene = write_scene(tmp_path, RIG_TOML.format(gap=5e-4) + ANALYSES)
     rep = _end_to_end(scene, tmp_path / "out")
     per = next(j for j in rep.jobs if j.kind == "periodic")
     # the diagram is that of the system the TOML describes (the Python API on the same arrays)
@@ -156,7 +151,7 @@ def test_a_system_written_out_runs_end_to_end_and_is_cached(tmp_path):
 
 def test_a_factory_runs_end_to_end_and_its_arrays_key_the_cache(tmp_path, factory_module,
                                                                   monkeypatch):
-    scene = _write(tmp_path, FACTORY_TOML.format(module=factory_module, gap=5e-4) + ANALYSES)
+    scene = write_scene(tmp_path, FACTORY_TOML.format(module=factory_module, gap=5e-4) + ANALYSES)
     rep = _end_to_end(scene, tmp_path / "out")
     inputs = rep.jobs[0].inputs["model"]
     assert inputs["factory"] == f"{factory_module}:rig" and inputs["args"] == {"gap": 5e-4}
@@ -187,7 +182,7 @@ def test_a_factory_runs_end_to_end_and_its_arrays_key_the_cache(tmp_path, factor
     ('[model]\nname = "System"\nM = [[1.0]]\n', ":1: model", "needs K"),
 ])
 def test_a_bad_model_is_named_by_file_line_and_key(tmp_path, text, where, what):
-    p = _write(tmp_path, text)
+    p = write_scene(tmp_path, text)
     with pytest.raises(SceneError) as err:
         load_scene(p)
     msg = str(err.value)
@@ -196,7 +191,7 @@ def test_a_bad_model_is_named_by_file_line_and_key(tmp_path, text, where, what):
 
 def test_a_changed_element_parameter_changes_the_cache_key(tmp_path):
     def keys(gap, k="2e4"):
-        p = _write(tmp_path, RIG_TOML.format(gap=gap).replace("2e4", k) + ANALYSES)
+        p = write_scene(tmp_path, RIG_TOML.format(gap=gap).replace("2e4", k) + ANALYSES)
         return {j.kind: j.key for j in plan(load_scene(p), tmp_path / "out")}
 
     k0 = keys(5e-4)
@@ -220,7 +215,7 @@ file = "bifurcations.csv"
 parameter = "elements[1].gap"
 values = [4e-4, 6e-4]
 """
-    scene = _write(tmp_path, text)
+    scene = write_scene(tmp_path, text)
     sc = load_scene(scene)
     gaps = [float(m["elements"][1]["gap"]) for _, m, _, _ in sc.variants()]
     assert gaps == [4e-4, 6e-4]
@@ -242,7 +237,7 @@ values = [4e-4, 6e-4]
 
 
 def test_a_bad_sweep_name_lists_the_names_that_exist(tmp_path):
-    p = _write(tmp_path, RIG_TOML.format(gap=5e-4) + ANALYSES
+    p = write_scene(tmp_path, RIG_TOML.format(gap=5e-4) + ANALYSES
                + '[sweep]\nparameter = "gap"\nvalues = [1e-3]\n')
     with pytest.raises(SceneError) as err:
         load_scene(p)
@@ -293,7 +288,7 @@ def test_every_analysis_key_is_a_command_line_option_with_the_same_default():
 
 
 def test_the_command_line_takes_a_scene_model_and_sets_parameters_by_name(tmp_path, capsys):
-    scene = _write(tmp_path, RIG_TOML.format(gap=5e-4))
+    scene = write_scene(tmp_path, RIG_TOML.format(gap=5e-4))
     out = tmp_path / "frc.h5"
     rc = main(["frc", "--model", str(scene), "--set", "elements[1].gap=6e-4", "--f-range",
                "8", "11", "--orders", "1", "--n-grid", "3", "--accuracy", "off", "--out",
@@ -375,7 +370,7 @@ def test_nlbeam_continue_follows_an_element_parameter_as_the_python_api(tmp_path
         assert args[k] == PERIODIC[k], k
         if k in sig:
             assert sig[k] == PERIODIC[k], k
-    scene = _write(tmp_path, SDOF_TOML)
+    scene = write_scene(tmp_path, SDOF_TOML)
     out = tmp_path / "c.h5"
     rc = main(["continue", "elements[0].gap", "0.02", "0.3", "--frequency", "0.12",
                "--amplitude", "0.1", "--model", str(scene), "--accuracy", "off", "--out",
@@ -437,8 +432,8 @@ def test_a_moments_table_of_a_sweep_has_a_column_of_the_swept_value(tmp_path):
 def test_nlbeam_run_sets_scene_parameters_by_the_sweeps_names(tmp_path, capsys):
     """`nlbeam run SCENE --set NAME=VALUE` plans exactly the analyses of the scene with the
     value written in (same cache keys)."""
-    base = _write(tmp_path, RIG_TOML.format(gap=5e-4) + ANALYSES, "base.toml")
-    written = _write(tmp_path, (RIG_TOML.format(gap=6e-4) + ANALYSES).replace(
+    base = write_scene(tmp_path, RIG_TOML.format(gap=5e-4) + ANALYSES, "base.toml")
+    written = write_scene(tmp_path, (RIG_TOML.format(gap=6e-4) + ANALYSES).replace(
         "band = [0.0, 40.0]", "band = [0.0, 30.0]"), "written.toml")
     out = tmp_path / "out"
     keys = {j.kind: j.key for j in plan(load_scene(written), out)}

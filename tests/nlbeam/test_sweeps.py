@@ -7,30 +7,15 @@ import numpy as np
 import pytest
 
 import stochastic
+from helpers import MOMENTS_TABLE, PSD_FIGURE, TINY_STOCHASTIC
 from nlbeam.scenes import SceneError, load_scene, run_scene
 from nlbeam.sweeps import run_jobs
 
-SWEEP = """
-[stochastic]
-band = [0.0, 100.0]
-rms = 1e-4
-seed = 1
-duration = 1.5
-transient = 0.1
-psd_resolution = 2.0
-
+SWEEP = TINY_STOCHASTIC + """
 [sweep]
 parameter = "seed"
 values = [1, 2]
-
-[[figure]]
-kind = "psd"
-file = "psd.png"
-
-[[table]]
-kind = "moments"
-file = "moments.csv"
-"""
+""" + PSD_FIGURE + MOMENTS_TABLE
 
 
 def _square(x):

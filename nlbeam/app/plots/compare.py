@@ -116,13 +116,6 @@ def plot_comparison(psd, frc, matches=None, *, excitation=None, f_max=None, labe
     ax2.legend(fontsize=8, loc="upper right")
     ax1.set_xlim(0.0, hi)
     ax1.set_title("stochastic response peaks and the periodic diagram")
-    if ax is None:
-        fig.tight_layout()
-    if path is not None:
-        from .files import save_figure
+    from .files import finish_figure
 
-        if opened:
-            save_figure(fig, path)
-        else:
-            fig.savefig(path)
-    return fig
+    return finish_figure(fig, path, opened, tight_layout=ax is None)

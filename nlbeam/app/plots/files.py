@@ -7,7 +7,7 @@ import sys
 
 from ..files import atomic_path
 
-__all__ = ["files_backend", "save_figure"]
+__all__ = ["files_backend", "save_figure", "finish_figure"]
 
 
 def files_backend():
@@ -67,3 +67,19 @@ def check_plot_options(path=None, flags=(), ax=None):
     if ax is not None and not hasattr(ax, "figure"):
         raise ArgumentTypeError(f"ax: must be a matplotlib Axes or None, got "
                                 f"{type(ax).__name__}")
+
+
+def finish_figure(fig, path, opened, *, tight_layout=None, dpi=None):
+    """The end of every plot function: ``tight_layout`` (default: when the call ``opened``
+    the figure) lays it out; with a ``path`` it is written there, by ``save_figure`` (atomic,
+    then closed) when the call opened it, else by ``fig.savefig`` (the caller's figure stays
+    open); dpi: None for each writer's default. Returns ``fig``."""
+    if opened if tight_layout is None else tight_layout:
+        fig.tight_layout()
+    if path is not None:
+        kw = {} if dpi is None else {"dpi": dpi}
+        if opened:
+            save_figure(fig, path, **kw)
+        else:
+            fig.savefig(path, **kw)
+    return fig

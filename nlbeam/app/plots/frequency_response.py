@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .units import excitation_kind
+from .units import excitation_kind, legend_outside
 
 _MARK = {"fold": ("o", "fold", 6), "period-doubling": ("s", "period doubling", 6),
          "neimark-sacker": ("^", "Neimark-Sacker", 6), "grazing": ("x", "grazing", 4)}
@@ -114,16 +114,7 @@ for all but the last panel of a row). ``path``: also write the
     else:
         ax.plot([], [], "-", color="0.3", lw=1.3, label="stability not computed")
     if legend:
-        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
-                  frameon=False)
-    fig = ax.figure
-    if opened:
-        fig.tight_layout()
-    if path is not None:
-        from .files import save_figure
+        legend_outside(ax, borderaxespad=0.0, frameon=False)
+    from .files import finish_figure
 
-        if opened:
-            save_figure(fig, path)
-        else:
-            fig.savefig(path)
-    return fig
+    return finish_figure(ax.figure, path, opened)

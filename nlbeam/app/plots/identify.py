@@ -33,13 +33,6 @@ def plot_contact_fit(fit, delta, rate, force, *, ax=None, max_collisions=8, path
     ax.set_xlim(left=0.0)
     ax.set_ylim(bottom=min(0.0, float(np.min(np.concatenate([c.force for c in cs])))))
     ax.legend(fontsize=7, loc="upper left", frameon=False)
-    if opened:
-        fig.tight_layout()
-    if path is not None:
-        from .files import save_figure
+    from .files import finish_figure
 
-        if opened:
-            save_figure(fig, path)
-        else:
-            fig.savefig(path)
-    return fig
+    return finish_figure(fig, path, opened)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .units import excitation_kind
+from .units import excitation_kind, legend_outside
 
 __all__ = ["plot_stability_chart"]
 
@@ -82,19 +82,10 @@ def plot_stability_chart(chart, ax=None, *, path=None, grazing=True, legend=True
         handles += [Line2D([], [], ls="", marker=_CODIM2.get(k, "*"), color="k", mfc="none",
                            label=k) for k in kinds]
         if handles:
-            ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0),
-                      fontsize=8)
-    fig = ax.figure
-    if opened:
-        fig.tight_layout()
-    if path is not None:
-        from .files import save_figure
+            legend_outside(ax, handles=handles)
+    from .files import finish_figure
 
-        if opened:
-            save_figure(fig, path)
-        else:
-            fig.savefig(path)
-    return fig
+    return finish_figure(ax.figure, path, opened)
 
 
 def _edges(v):

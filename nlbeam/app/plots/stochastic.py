@@ -35,13 +35,10 @@ def _figure(ax, figsize=(6.4, 4.0), path=None, flags=()):
 
 
 def _finish(fig, path, opened, dpi=130):
-    if path is not None:
-        from .files import save_figure
+    from .files import finish_figure
 
-        if opened:
-            return save_figure(fig, os.fspath(path), dpi=dpi) and fig
-        fig.savefig(os.fspath(path), dpi=dpi)
-    return fig
+    return finish_figure(fig, None if path is None else os.fspath(path), opened,
+                         tight_layout=False, dpi=dpi)
 
 
 def _kind(result):

@@ -6,7 +6,8 @@ import re
 
 import numpy as np
 
-__all__ = ["excitation_kind", "channel_unit", "axis_label", "psd_label", "log_limits"]
+__all__ = ["excitation_kind", "channel_unit", "axis_label", "psd_label", "log_limits",
+           "legend_outside"]
 
 #: channel kind -> (SI unit, drawn unit, factor SI -> drawn) for base excitation
 _BASE = {"x": ("m", "mm", 1e3), "delta": ("m", "mm", 1e3), "y": ("m", "mm", 1e3),
@@ -53,3 +54,9 @@ def log_limits(values, decades=8.0):
         return None
     top = float(v.max()) * 3.0
     return max(float(v.min()) / 2.0, top * 10.0 ** -decades), top
+
+
+def legend_outside(ax, **kw):
+    """The legend of ``ax`` to the right of the axes, its top at theirs (font size 8; kw: more
+    options of ``ax.legend``)."""
+    return ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), **kw)
