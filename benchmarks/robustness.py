@@ -147,28 +147,49 @@ def _digits(err, f):
     return f"{d.min():.1f}-{d.max():.1f} (median {np.median(d):.1f})"
 
 
-def _turns_without_fold(frc, i, noise=1e-6, near=1e-4):
-    """How many times branch i reverses direction in frequency (by more than ``noise``
-    relative: near sticking contacts the points wiggle at the 1e-7 level) where no fold of
-    that branch (smooth or at a grazing corner) and no period doubling (a switched branch
-    passes through the period doubling it starts or ends at, where it turns in frequency) lies
-    within ``near`` (relative): a retrace when > 0."""
-    turns, ext, sgn = [], None, 0.0
-    for v in map(float, frc.branches[i].frequency):
-        if ext is None:
-            ext = v
+def turns(frequency, noise=1e-6):
+    """The turns of a branch in frequency: (index k of the extreme point, +1 at a maximum, -1
+    at a minimum), ignoring reversals below ``noise`` relative (near sticking contacts the
+    points wiggle at the 1e-7 level)."""
+    out, k, sgn = [], None, 0.0
+    f = np.asarray(frequency, dtype=float)
+    for j, v in enumerate(f):
+        if k is None:
+            k = j
         elif sgn == 0.0:
-            if abs(v - ext) > noise * abs(ext):
-                sgn = np.sign(v - ext)
-                ext = v
-        elif (v - ext) * sgn > 0:
-            ext = v
-        elif abs(v - ext) > noise * abs(ext):
-            turns.append(ext)
-            sgn, ext = -sgn, v
-    marks = [b.frequency for b in frc.bifurcations
-             if (b.kind == "fold" and b.branch == i) or b.kind == "period-doubling"]
-    return sum(not any(abs(t - m) <= near * abs(t) for m in marks) for t in turns)
+            if abs(v - f[k]) > noise * abs(f[k]):
+                sgn, k = np.sign(v - f[k]), j
+        elif (v - f[k]) * sgn > 0:
+            k = j
+        elif abs(v - f[k]) > noise * abs(f[k]):
+            out.append((k, int(sgn)))
+            sgn, k = -sgn, j
+    return out
+
+
+def _turns_without_fold(frc, i, noise=1e-6, near=1e-4):
+    """How many times branch i turns back in frequency where no fold of that branch (smooth,
+    or at a grazing corner) and no period doubling (a switched branch passes through the
+    period doubling it starts or ends at, where it turns) explains it: a retrace when > 0.
+    The branch's polyline turns at a point (index k), the fold lies on a step next to it, so
+    beyond it: at a maximum f_k of the polyline the fold lies in [f_k (1 - near), f_k + h], at a
+    minimum in [f_k - h, f_k (1 + near)], h the longer of the two steps at k (a turning point
+    below a maximum, or above a minimum, is not the one the branch turned at); a fold is taken
+    at its reported frequency and at its level-0 value (the diagram's own step, where its
+    branch turns)."""
+    f = np.asarray(frc.branches[i].frequency, dtype=float)
+    marks = []
+    for b in frc.bifurcations:
+        if (b.kind == "fold" and b.branch == i) or b.kind == "period-doubling":
+            marks.append(b.frequency)
+            if b.levels is not None and len(b.levels) and frc.parameter == "frequency":
+                marks.append(float(b.levels[0]))  # where the diagram's own branch turns
+    n = 0
+    for k, sgn in turns(f, noise):
+        h = max(abs(f[k] - f[max(k - 1, 0)]), abs(f[min(k + 1, len(f) - 1)] - f[k]))
+        lo, hi = ((f[k] * (1 - near), f[k] + h) if sgn > 0 else (f[k] - h, f[k] * (1 + near)))
+        n += not any(lo <= m <= hi for m in marks)
+    return n
 
 
 def main(argv=None):
