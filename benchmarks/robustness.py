@@ -171,24 +171,27 @@ def _turns_without_fold(frc, i, noise=1e-6, near=1e-4):
     """How many times branch i turns back in frequency where no fold of that branch (smooth,
     or at a grazing corner) and no period doubling (a switched branch passes through the
     period doubling it starts or ends at, where it turns) explains it: a retrace when > 0.
-    The branch's polyline turns at a point (index k), the fold lies on a step next to it, so
-    beyond it: at a maximum f_k of the polyline the fold lies in [f_k (1 - near), f_k + h], at a
-    minimum in [f_k - h, f_k (1 + near)], h the longer of the two steps at k (a turning point
-    below a maximum, or above a minimum, is not the one the branch turned at); a fold is taken
-    at its reported frequency and at its level-0 value (the diagram's own step, where its
-    branch turns)."""
+    The branch's polyline turns at a point (index k) and the fold lies on a step next to it,
+    so beyond it: at a maximum f_k the fold must lie in [f_k - near f_k, f_k + h + near f_k],
+    at a minimum in [f_k - h - near f_k, f_k + near f_k], h the longer of the two steps at k
+    (a turning point below a maximum, or above a minimum, is not the one the branch turned
+    at). A fold counts with its tracer bracket (``tolerance``: at a corner the turning point
+    lies on the chord between the bracket's ends, which are not branch points) at its reported
+    frequency and at its level-0 value (the diagram's own step)."""
     f = np.asarray(frc.branches[i].frequency, dtype=float)
     marks = []
     for b in frc.bifurcations:
         if (b.kind == "fold" and b.branch == i) or b.kind == "period-doubling":
-            marks.append(b.frequency)
+            tol = float(b.tolerance) if np.isfinite(b.tolerance) else 0.0
+            marks.append((b.frequency, tol))
             if b.levels is not None and len(b.levels) and frc.parameter == "frequency":
-                marks.append(float(b.levels[0]))  # where the diagram's own branch turns
+                marks.append((float(b.levels[0]), tol))  # where the diagram's branch turns
     n = 0
     for k, sgn in turns(f, noise):
         h = max(abs(f[k] - f[max(k - 1, 0)]), abs(f[min(k + 1, len(f) - 1)] - f[k]))
-        lo, hi = ((f[k] * (1 - near), f[k] + h) if sgn > 0 else (f[k] - h, f[k] * (1 + near)))
-        n += not any(lo <= m <= hi for m in marks)
+        e = near * abs(f[k])
+        lo, hi = (f[k] - e, f[k] + h + e) if sgn > 0 else (f[k] - h - e, f[k] + e)
+        n += not any(m - t <= hi and m + t >= lo for m, t in marks)
     return n
 
 
