@@ -513,12 +513,13 @@ def corner_indices(branch, bifurcations, index):
 
 def branch_errors(model, branch, integrator, *, every=10, corners=()):
     """Error estimates of a Branch's xmax (m) and multipliers at every ``every``-th point, the
-    two ends and both sides of every corner (``corners``: see ``corner_indices``; next to a corner the error changes abruptly, and an estimate
-    interpolated across it does not bound the error), computed by ``orbit_error`` after the
-    point is solved again at the branch's integrator;
-    the multipliers' as the largest over the point's multipliers of error / max(1, |mu|)
-    (absolute inside the unit circle, relative outside). Between sampled points each point
-    gets the larger estimate of its two nearest sampled neighbours along the branch. Returns
+    two ends and both sides of every corner (``corners``: see ``corner_indices``; next to a
+    corner the error changes abruptly, and an estimate interpolated across it does not bound
+    the error), computed by ``orbit_error`` after the point is solved again at the branch's
+    integrator; the multipliers' as the largest over the point's multipliers of
+    error / max(1, |mu|) (absolute inside the unit circle, relative outside). Between sampled
+    points each point gets the larger estimate of its two nearest sampled neighbours along the
+    branch. Returns
     (xmax_error (n,), multipliers_error (n,) or None without stability, sampled (n,) bool:
     where the estimate was computed, not interpolated). A sample whose refined solve fails
     (next to a fold) is left out."""
