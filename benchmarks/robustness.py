@@ -23,7 +23,7 @@ import numpy as np
 import nlbeam
 
 import continuation as C
-from continuation.turns import turns
+from continuation.turns import turn_indices
 
 GAVE_UP = ("stuck at a corner", "step underflow", "no progress", "max_points",
            "could not move the segment boundaries")
@@ -149,15 +149,31 @@ def _digits(err, f):
 
 
 def _turns_without_fold(frc, i, noise=1e-6, near=1e-4):
-    """How many times branch i reverses direction in frequency (by more than ``noise``
-    relative: near sticking contacts the points wiggle at the 1e-7 level) where no fold of
-    that branch (smooth or at a grazing corner) and no period doubling (a switched branch
-    passes through the period doubling it starts or ends at, where it turns in frequency) lies
-    within ``near`` (relative): a retrace when > 0."""
-    marks = [b.frequency for b in frc.bifurcations
-             if (b.kind == "fold" and b.branch == i) or b.kind == "period-doubling"]
-    return sum(not any(abs(t - m) <= near * abs(t) for m in marks)
-               for t in turns(frc.branches[i].frequency, noise))
+    """How many times branch i turns back in frequency where no fold of that branch (smooth,
+    or at a grazing corner) and no period doubling (a switched branch passes through the
+    period doubling it starts or ends at, where it turns) explains it: a retrace when > 0.
+    The branch's polyline turns at a point (index k) and the fold lies on a step next to it,
+    so beyond it: at a maximum f_k the fold must lie in [f_k - near f_k, f_k + h + near f_k],
+    at a minimum in [f_k - h - near f_k, f_k + near f_k], h the longer of the two steps at k
+    (a turning point below a maximum, or above a minimum, is not the one the branch turned
+    at). A fold counts with its tracer bracket (``tolerance``: at a corner the turning point
+    lies on the chord between the bracket's ends, which are not branch points) at its reported
+    frequency and at its level-0 value (the diagram's own step)."""
+    f = np.asarray(frc.branches[i].frequency, dtype=float)
+    marks = []
+    for b in frc.bifurcations:
+        if (b.kind == "fold" and b.branch == i) or b.kind == "period-doubling":
+            tol = float(b.tolerance) if np.isfinite(b.tolerance) else 0.0
+            marks.append((b.frequency, tol))
+            if b.levels is not None and len(b.levels) and frc.parameter == "frequency":
+                marks.append((float(b.levels[0]), tol))  # where the diagram's branch turns
+    n = 0
+    for k, sgn in turn_indices(f, noise):
+        h = max(abs(f[k] - f[max(k - 1, 0)]), abs(f[min(k + 1, len(f) - 1)] - f[k]))
+        e = near * abs(f[k])
+        lo, hi = (f[k] - e, f[k] + h + e) if sgn > 0 else (f[k] - h - e, f[k] + e)
+        n += not any(m - t <= hi and m + t >= lo for m, t in marks)
+    return n
 
 
 def main(argv=None):

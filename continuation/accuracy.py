@@ -392,7 +392,8 @@ def bifurcation_levels(model, amplitude, bif, integrator, *, parameter="frequenc
     criterion or a wider bracket); one reported at a grazing point (``smooth`` False) as a
     grazing point. Returns a
     BifurcationLevels; a level that does not converge ends the sequence (``failed`` says why;
-    with fewer than two levels the error is NaN)."""
+    with fewer than two levels the error is NaN, except at a grazing point: the width of the
+    diagram's bracket, which holds it)."""
     if bif.kind not in KINDS_LOCATED:
         raise ValueError(f"bif.kind: must be one of {KINDS_LOCATED}, got {bif.kind!r}")
     p = float(bif.value)
@@ -430,6 +431,12 @@ def bifurcation_levels(model, amplitude, bif, integrator, *, parameter="frequenc
         width = max(abs(values[-1] - values[-2]), 0.5 * 10.0 ** -digits * abs(p))
     if len(values) < 2:
         value, error = (values[0] if values else float(bif.value)), float("nan")
+        if kind == "grazing" and math.isfinite(bif.tolerance) and bif.tolerance > 0:
+            # a corner the fixed-parameter bisection cannot bracket (e.g. a fold at the
+            # grazing point: beyond it no orbit of either kind lies near): the diagram's
+            # bracket, which holds the grazing point (and a turning point at it), is the bound
+            value, error = float(bif.value), float(bif.tolerance)
+            failed = failed or "not located again"
     error = max(error, 1e-15 * abs(value)) if math.isfinite(error) else error
     return BifurcationLevels(bif.kind, np.array(values), float(value), float(error), failed)
 
@@ -471,17 +478,48 @@ def _branch_problem(model, branch, i, integrator):
     return best[1], u, p
 
 
-def sample_indices(n, every):
-    """Every ``every``-th of n branch points, the first and the last always."""
-    return np.unique(np.r_[np.arange(0, n, max(1, int(every))), n - 1]) if n else np.array([], int)
+def sample_indices(n, every, corners=()):
+    """Every ``every``-th of n branch points, the first and the last always, and both points
+    around each corner (``corners``: i for a corner between points i and i + 1), so that no
+    estimate is interpolated across a corner."""
+    if not n:
+        return np.array([], int)
+    near = [j for i in corners for j in (i, i + 1) if 0 <= j < n]
+    return np.unique(np.r_[np.arange(0, n, max(1, int(every))), n - 1, near]).astype(int)
 
 
-def branch_errors(model, branch, integrator, *, every=10):
-    """Error estimates of a Branch's xmax (m) and multipliers at every ``every``-th point and
-    the two ends (``orbit_error`` after the point is solved again at the branch's integrator);
-    the multipliers' as the largest over the point's multipliers of error / max(1, |mu|)
-    (absolute inside the unit circle, relative outside). Between sampled points each point
-    gets the larger estimate of its two nearest sampled neighbours along the branch. Returns
+def corner_indices(branch, bifurcations, index):
+    """The corners of ``branch`` (number ``index``): i for each grazing point, or bifurcation
+    reported at one, of the diagram on it, where i, i + 1 are the branch points around it (the
+    segment of the (parameter, xmax) polyline nearest it, in units of the branch's ranges)."""
+    n = len(branch.values)
+    if n < 2:
+        return []
+    v, x = np.asarray(branch.values, float), np.asarray(branch.xmax, float)
+    sv, sx = max(np.ptp(v), 1e-300), max(np.ptp(x), 1e-300)
+    V, X = v / sv, x / sx
+    dV, dX = np.diff(V), np.diff(X)
+    L2 = np.where(dV ** 2 + dX ** 2 > 0, dV ** 2 + dX ** 2, 1.0)
+    out = set()
+    for bf in bifurcations:
+        if bf.branch != index or not (bf.kind == "grazing" or not bf.smooth):
+            continue
+        pv, px = bf.value / sv, bf.xmax / sx
+        lam = np.clip(((pv - V[:-1]) * dV + (px - X[:-1]) * dX) / L2, 0.0, 1.0)
+        d = np.hypot(V[:-1] + lam * dV - pv, X[:-1] + lam * dX - px)
+        out.add(int(np.argmin(d)))
+    return sorted(out)
+
+
+def branch_errors(model, branch, integrator, *, every=10, corners=()):
+    """Error estimates of a Branch's xmax (m) and multipliers at every ``every``-th point, the
+    two ends and both sides of every corner (``corners``: see ``corner_indices``; next to a
+    corner the error changes abruptly, and an estimate interpolated across it does not bound
+    the error), computed by ``orbit_error`` after the point is solved again at the branch's
+    integrator; the multipliers' as the largest over the point's multipliers of
+    error / max(1, |mu|) (absolute inside the unit circle, relative outside). Between sampled
+    points each point gets the larger estimate of its two nearest sampled neighbours along the
+    branch. Returns
     (xmax_error (n,), multipliers_error (n,) or None without stability, sampled (n,) bool:
     where the estimate was computed, not interpolated). A sample whose refined solve fails
     (next to a fold) is left out."""
@@ -489,7 +527,7 @@ def branch_errors(model, branch, integrator, *, every=10):
     xe = np.full(n, np.nan)
     me = np.full(n, np.nan)
     sampled = np.zeros(n, dtype=bool)
-    for i in sample_indices(n, every):
+    for i in sample_indices(n, every, corners):
         try:
             prob, u, p = _branch_problem(model, branch, i, integrator)
             ev = prob.evaluate(u, p, jac=True, jac_p=False)
@@ -514,13 +552,13 @@ def branch_errors(model, branch, integrator, *, every=10):
 
 
 def _short(values, n=8):
-    s = ", ".join(f"{v:.7g}" for v in values[:n])
+    s = ", ".join(v if isinstance(v, str) else f"{v:.7g}" for v in values[:n])
     return s + (f" and {len(values) - n} more" if len(values) > n else "")
 
 
 def _branch_job(args):
-    model, branch, integrator, every = args
-    return branch_errors(model, branch, integrator, every=every)
+    model, branch, integrator, every, corners = args
+    return branch_errors(model, branch, integrator, every=every, corners=corners)
 
 
 def _levels_job(args):
@@ -548,7 +586,9 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segment
     mt = multiplier_target(digits)
     n_bad = n_tot = 0
     worst = None
-    errs = run(_branch_job, [(model, b, integrator, every) for b in frc.branches])
+    errs = run(_branch_job, [(model, b, integrator, every,
+                              corner_indices(b, frc.bifurcations, bi))
+                             for bi, b in enumerate(frc.branches)])
     for bi, (b, (xe, me, sm)) in enumerate(zip(frc.branches, errs)):
         b.xmax_error, b.multipliers_error, b.error_sampled = xe, me, sm
         if me is None or not sm.any():
@@ -568,12 +608,15 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segment
          dict(parameter=frc.parameter, digits=digits, segments=segments,
               max_levels=grazing_levels if at_grazing(bf) else max_levels))
         for bf in located])
+    bracketed = []
     for bf, lv in zip(located, levels):
         bf.levels = lv.values
         bf.error = lv.error
         if not math.isfinite(lv.error):
             failed.append(bf)
             continue
+        if lv.failed and len(lv.values) < 2:
+            bracketed.append(bf)
         bf.value = lv.value
         if frc.parameter == "frequency":
             bf.frequency = lv.value
@@ -591,6 +634,11 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segment
         if f_:
             parts.append(f"{len(f_)} {what} point(s) could not be located again with a finer "
                          f"step (error NaN): at {_short(f_)}")
+    if bracketed:
+        parts.append(f"{len(bracketed)} grazing point(s) or bifurcation(s) at one could not be "
+                     "located again by bisection at a fixed frequency (a fold at the corner?): "
+                     "their error is the width of the diagram's bracket: at "
+                     + _short([f"{b.value:.9g} +- {b.error:.1e}" for b in bracketed]))
     if above:
         parts.append(f"{len(above)} fold/PD/NS point(s) with errors above the target after "
                      f"{max_levels} step halvings: at "

@@ -195,6 +195,9 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
         if any(np.max(np.abs(zs - v)) < 0.1 * max(np.max(np.abs(v - z_a)), 1e-9)
                for v in avoid):
             return None
+        if _lower_order(prob, a, zs):
+            return None  # an orbit of a lower order (e.g. the parent branch at a period
+            # doubling, which solves this order's problem too): not this branch
         tr.complete_jacobian(prob, evs)
         b = tr._point(prob, zs, evs)
         cr = check_crossing(tr, prob, a, z_a, t_in, b, zs, strict=False)
@@ -249,12 +252,30 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
                 res = candidate(zs, evs)
                 if res is not None:
                     return res
-    if same is not None and tr._creeps < 3 and joined(tr, prob, a, z_a, same[0]):
+    if (same is not None and tr._creeps < 3 and not _lower_order(prob, a, same[0])
+            and joined(tr, prob, a, z_a, same[0])):
         tr._creeps += 1
         zs, evs = same
         tr.complete_jacobian(prob, evs)
         return zs, evs, tr._point(prob, zs, evs), None
     return None
+
+
+def _lower_order(prob, a, zs):
+    """True when the solution zs (scaled) of a problem of order n > 1 repeats after fewer
+    excitation periods while the branch point a does not (``minimal_order``, for problems that
+    have it): a jump from a switched branch onto its parent branch. (Measured: the paper model's
+    order-2 branch from the period doubling at 22.4166 Hz jumped to the order-1 orbit at
+    22.4392 Hz, ran back and forth between the two and retraced itself.)"""
+    order = getattr(prob, "order", 1)
+    mo = getattr(prob, "minimal_order", None)
+    if order <= 1 or mo is None:
+        return False
+    try:
+        return (mo(zs[:-1] * prob.scale_u, zs[-1] * prob.scale_p) < order
+                and mo(a.u, a.p) == order)
+    except (ConvergenceError, ValueError):
+        return False
 
 
 def joined(tr, prob, a, z_a, z_b):

@@ -20,7 +20,7 @@ import nlbeam
 from continuation.diagram import _polish
 from continuation.pathfollow import Tracer
 from continuation.shooting import Integrator, _problem_from_state
-from continuation.turns import turns
+from continuation.turns import turn_indices, turns
 
 
 def test_turns_are_the_extrema_left_by_more_than_the_noise():
@@ -28,6 +28,8 @@ def test_turns_are_the_extrema_left_by_more_than_the_noise():
     assert turns([0.0, 1.0, 2.0, 1.5, 3.0, 2.9999999]) == [2.0, 1.5]
     assert turns([5.0, 4.0, 4.0000001, 3.0]) == []
     assert turns([1.0, 2.0, 1.0], noise=2.0) == []
+    # the same turns by index, +1 at a maximum and -1 at a minimum
+    assert turn_indices([0.0, 1.0, 2.0, 1.5, 3.0, 2.9999999]) == [(2, 1), (3, -1)]
 
 
 def _assert_turns_at_folds(values, folds, rel):

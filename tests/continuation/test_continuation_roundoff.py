@@ -241,9 +241,13 @@ def test_grazing_points_within_each_others_bracket_are_merged():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="the tracer's path through grazing corners (7.4-9.8, "
-                   "22.4, 66-68, 112-113 Hz) still depends on round-off (issue 13 item 1; "
-                   "branch trust-tracer): remove this mark when it passes")
+@pytest.mark.xfail(strict=True, reason="the tracer's path still depends on round-off (issue 13 "
+                   "item 1; measured on s6-roundoff, x (1 + 1e-13)): 9.15-9.30 Hz (the order-1 "
+                   "end in the chattering stretch, 'no progress' at 9.1739 vs 'step underflow' "
+                   "at 9.1554, and the order-2 branches there), 66.55 Hz (an order-2 pair of "
+                   "grazing points passed by one run only: 'stuck at a corner' at 66.5703 vs "
+                   "'discontinuous map' at 66.5736), 110.7-111.1 Hz (an order-3 branch stopped "
+                   "by the overlap check at 112.008 vs 110.877 Hz): remove when it passes")
 def test_paper_diagram_keeps_its_structure_under_round_off():
     """The whole paper diagram (A = 0.1 mm, 5-150 Hz, orders 1-3) with m, k, b, K_hertz x
     (1 + 1e-13): the same structure. (On 0312b23, outside those intervals the bifurcation
