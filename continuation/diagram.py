@@ -558,18 +558,18 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
         bi = len(branches)
         br = _to_branch(points, order, parameter, origin, ends)
         branches.append(br)
-        if early is not None:
-            early.branch(bi, br)
         n_bifs = len(bifs)
         for L in located:
             bf = _bifurcation(L, order, bi)
             if any(_same_point(bf, other) for other in bifs) or _merged_grazing(bf, bifs):
                 continue  # where a branch ran onto another one, its end point is already listed
             bifs.append(bf)
-            if early is not None:
-                early.bifurcation(amplitude, bf)
             if L.kind == "period-doubling":
                 pd_points.append((L.point, order, bi if bf.smooth else None))
+        if early is not None:  # (once all are added: a grazing point may absorb the next)
+            for bf in bifs[n_bifs:]:
+                early.bifurcation(amplitude, bf)
+            early.branch(bi, br, bifs)
         lo, hi = float(np.min(br.frequency)), float(np.max(br.frequency))
         say(f"branch {bi + 1} (order {order}, {origin}): {lo:.6g}-{hi:.6g} Hz, "
             f"{len(br.values)} points, {len(bifs) - n_bifs} bifurcations, ends: "
