@@ -30,6 +30,7 @@ the stated error meets the target (``accuracy``: 6 significant digits by default
 """
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 
@@ -43,6 +44,7 @@ from .shooting import ShootingProblem, _problem_from_state
 
 SAFETY = 2.0  # error of a level-0 value = SAFETY * |level 0 - level 1| (a bound for order >= 1)
 ACCURACY = {"default": 6.0, "high": 8.0}
+STAGNATION_FROM = 5  # _on_normal gives up from this iterate on where the residual stagnates
 KINDS_LOCATED = ("fold", "period-doubling", "neimark-sacker", "grazing")
 
 
@@ -196,16 +198,24 @@ def _secant_regular(prob, u0, p0, kind, hint, tol=1e-10, max_iter=12):
     return pb, ub
 
 
-def _on_normal(prob, z_c, t, z_start, jp, tol=1e-10, max_iter=12):
+def _on_normal(prob, z_c, t, z_start, jp, tol=1e-10, max_iter=12, ev0=None, with_ev=False):
     """The point of prob's branch on the hyperplane through z_c normal to t (scaled
     variables z = (u / scale_u, p / scale_p)), by Newton on the bordered system from z_start
     (dR/du from the variational equations at each iterate, the scaled dR/dp ``jp`` kept, or
-    with jp None taken afresh by a forward difference). Returns z."""
+    with jp None taken afresh by a forward difference). ev0: the evaluation at z_start, if
+    already made (with jac). Returns z, or (z, its evaluation) with ``with_ev``. Gives up
+    (ConvergenceError) where from iterate STAGNATION_FROM on the residual falls by less than a
+    factor 0.7 (the tracer's rule: the map is not smooth there, e.g. where contacts nearly
+    stick and it has noise far above tol; Newton on the map's own derivative converges
+    quadratically elsewhere)."""
     w, wp = prob.scale_u, prob.scale_p
     z = z_start.copy()
-    res = np.inf
-    for _ in range(max_iter):
-        ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=True, jac_p=jp is None)
+    res = res_prev = np.inf
+    for it in range(1, max_iter + 1):
+        if ev0 is not None and jp is not None:
+            ev, ev0 = ev0, None
+        else:
+            ev = prob.evaluate(z[:-1] * w, z[-1] * wp, jac=True, jac_p=jp is None)
         r = ev.R / w
         col = ev.Jp * wp / w if jp is None else jp
         A = np.vstack([np.hstack([ev.Ju * w[None, :] / w[:, None], col[:, None]]), t[None, :]])
@@ -215,20 +225,76 @@ def _on_normal(prob, z_c, t, z_start, jp, tol=1e-10, max_iter=12):
             raise ConvergenceError("fold: singular bordered Jacobian") from None
         res = float(np.max(np.abs(r)))
         if res <= tol and np.max(np.abs(dz)) <= 1e-7:
-            return z
+            return (z, ev) if with_ev else z
+        if it >= STAGNATION_FROM and res > tol and res > 0.7 * res_prev:
+            break
+        res_prev = res
         z = z + dz
     raise ConvergenceError(f"fold: the corrector did not converge near {z_c[-1] * wp:.9g} "
                            f"(residual {res:.1e})")
 
 
-def _fold_turning_point(prob, u0, p0, deltas=(1e-4, 1e-5), tol=1e-10):
-    """Fold of prob near (u0, p0): the extremum of p along prob's branch (its turning point,
-    which needs no monodromy), by successive parabolic interpolation of p(s) over points of the
-    branch on hyperplanes normal to the tangent t at (u0, p0), at positions s along t (scaled
-    arclength): three points at s = -delta, 0, delta, then each new point at the vertex of the
-    parabola through the last three, until the vertex moves less than 3e-6; started again with
-    the next of ``deltas`` when a corrector fails (a sharply curved branch), and at last with
-    dR/dp renewed at every corrector iterate. Returns (p, u)."""
+def _slope(prob, ev, t, jp):
+    """(dp/ds, dz/ds) of prob's branch at the point of ev (scaled; s the position along t, so
+    t . dz/ds = 1): the tangent of [dR/du | jp]. dR/du is the derivative of the fixed-step map
+    (the variational equations), so dp/ds vanishes exactly where dR/du is singular: at the
+    fold of the discrete map, whatever the (kept) dR/dp ``jp``, which only scales it."""
+    w = prob.scale_u
+    A = np.vstack([np.hstack([ev.Ju * w[None, :] / w[:, None], jp[:, None]]), t[None, :]])
+    rhs = np.zeros(len(t))
+    rhs[-1] = 1.0
+    try:
+        tau = np.linalg.solve(A, rhs)
+    except np.linalg.LinAlgError:
+        raise ConvergenceError("fold: singular bordered Jacobian") from None
+    return float(tau[-1]), tau
+
+
+def _vertex_by_slope(prob, z0, t, jp, delta, tol, ev0=None, hint=None, s_tol=3e-6,
+                     max_iter=10):
+    """The turning point of prob's branch near z0 (scaled) by the secant method on dp/ds
+    (``_slope``) over points on hyperplanes normal to t at positions s: the first at s = 0
+    (ev0: the evaluation at z0), the second a Newton step with the curvature p'' of the last
+    level (``hint['curvature']``) or at s = delta, each next one predicted along the last
+    tangent. When the secant step is below s_tol, p at the vertex is p + g step / 2 (g = dp/ds,
+    step = -g / p'': the parabola's vertex; p is quadratic in s there, so the error of s
+    enters squared). Returns (p scaled, z at the vertex)."""
+    hint = {} if hint is None else hint
+    z_a, ev_a = _on_normal(prob, z0, t, z0, jp, tol, ev0=ev0, with_ev=True)
+    g_a, tau_a = _slope(prob, ev_a, t, jp)
+    s_a = 0.0
+    curv = hint.get("curvature")
+    s_b = -g_a / curv if curv else delta
+    if not (1e-6 <= abs(s_b) <= 0.02):
+        s_b = delta if abs(s_b) < 1e-6 else float(np.sign(s_b)) * 0.02
+    for _ in range(max_iter):
+        z_b, ev_b = _on_normal(prob, z0 + s_b * t, t, z_a + (s_b - s_a) * tau_a, jp, tol,
+                               with_ev=True)
+        g_b, tau_b = _slope(prob, ev_b, t, jp)
+        if g_b == g_a:
+            raise ConvergenceError("fold: dp/ds does not change along the branch near "
+                                   f"{z0[-1] * prob.scale_p:.9g}")
+        curv = (g_b - g_a) / (s_b - s_a)
+        step = -g_b / curv
+        if abs(step) <= s_tol:
+            hint["curvature"] = curv
+            return float(z_b[-1] + 0.5 * g_b * step), z_b + step * tau_b
+        s_a, z_a, g_a, tau_a = s_b, z_b, g_b, tau_b
+        s_b = s_b + float(np.clip(step, -0.02, 0.02))
+    raise ConvergenceError(f"fold: no turning point of the branch found near "
+                           f"{z0[-1] * prob.scale_p:.9g}")
+
+
+def _fold_turning_point(prob, u0, p0, deltas=(1e-4, 1e-5), tol=1e-10, hint=None):
+    """Fold of prob near (u0, p0): the extremum of p along prob's branch (its turning point),
+    over points of the branch on hyperplanes normal to the tangent t at (u0, p0): by the
+    secant method on dp/ds from the variational Jacobian (``_vertex_by_slope``; 3-4 points),
+    else by successive parabolic interpolation of p(s) alone (``_vertex_along``: three points
+    at s = -delta, 0, delta, then each new point at the vertex of the parabola through the
+    last three, until the vertex moves less than 3e-6); started again with the next of
+    ``deltas`` when a corrector fails (a sharply curved branch), and at last with dR/dp
+    renewed at every corrector iterate. hint: a dict carried from level to level (the
+    curvature). Returns (p, u)."""
     w, wp = prob.scale_u, prob.scale_p
     z0 = np.r_[np.asarray(u0) / w, p0 / wp]
     ev = prob.evaluate(u0, p0, jac=True, jac_p=True)
@@ -236,6 +302,12 @@ def _fold_turning_point(prob, u0, p0, deltas=(1e-4, 1e-5), tol=1e-10):
     J = np.hstack([ev.Ju * w[None, :] / w[:, None], jp[:, None]])
     t = np.linalg.svd(J)[2][-1]  # the tangent (null vector of [dR/du | dR/dp], scaled)
     err = None
+    if prob.variational:
+        try:
+            ps, z = _vertex_by_slope(prob, z0, t, jp, deltas[0], tol, ev0=ev, hint=hint)
+            return float(ps * wp), z[:-1] * w
+        except ConvergenceError as exc:
+            err = exc
     for delta, jp_ in [(d, jp) for d in deltas] + [(deltas[-1], None)]:
         try:
             z = _vertex_along(prob, z0, t, jp_, delta, tol)
@@ -283,16 +355,18 @@ def _vertex_along(prob, z0, t, jp, delta, tol, s_tol=3e-6, max_iter=12):
 def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60):
     """Grazing point of prob near p0: where the number of impacts per period changes, by
     bisection in p between orbits solved at fixed p (the bracket is first widened from
-    ``width`` until its ends differ) down to a width of ``resolution`` |p0|. Returns (the
-    middle of the bracket, u at its end on p0's side, half the bracket's width)."""
+    ``width``, 4 times at each try, up to 2^11 ``width``, until its ends differ) down to a
+    width of ``resolution`` |p0|. Returns (the middle of the bracket, u at its end on p0's
+    side, half the bracket's width)."""
     def solve(u, p):
         u, ev, _, _ = prob.solve(u, p, tol=tol, max_iter=12)
         return u, ev.n_impacts
 
     u_mid, n_mid = solve(u0, p0)
     d = max(width, 1e-9 * abs(p0))
+    d_max = min(0.01 * abs(p0), 2.0 ** 11 * d)  # the widest bracket tried
     lo = hi = None
-    for _ in range(12):
+    while True:
         for s in (-1.0, 1.0):
             try:
                 u_s, n_s = solve(u_mid, p0 + s * d)
@@ -304,9 +378,9 @@ def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60):
                 break
         if lo is not None:
             break
-        d *= 2.0
-        if d > 0.01 * abs(p0):
+        if d >= d_max:
             break
+        d = min(4.0 * d, d_max)
     if lo is None:
         raise ConvergenceError(f"grazing: no change of the number of impacts near {p0:.9g}")
     for _ in range(max_iter):
@@ -333,7 +407,7 @@ def _locate(kind, prob, u, p, width, resolution, hint):
     if kind == "grazing":
         return _grazing_bisect(prob, u, p, width, resolution)
     if kind == "fold":
-        return (*_fold_turning_point(prob, u, p), 0.0)
+        return (*_fold_turning_point(prob, u, p, hint=hint), 0.0)
     return (*_secant_regular(prob, u, p, kind, hint), 0.0)
 
 
@@ -377,9 +451,13 @@ class BifurcationLevels:
     failed: str = ""
 
 
-# the kinds whose diagram value is not the level-0 value of the method used at the finer levels
-# (folds: the diagram's test function uses the variational monodromy, the turning point not;
-# grazing points: the diagram's bracket may be wide), located again at level 0
+# the kinds whose diagram value may not be the level-0 value of the method used at the finer
+# levels, located again at level 0 unless the diagram's bracket is narrow (grazing points) or,
+# for folds, the diagram had the variational equations: its fold test function (the sign of
+# prod(mu - 1), mu from the derivative of the fixed-step map) changes sign exactly where dR/du
+# is singular, the turning point of the discrete map (paper diagram, 0.1 mm: the diagram's
+# folds and their level-0 turning points agree to 1e-13..3e-9 relative, 3.5e-6 at one in the
+# chattering stretch that no finer level locates either)
 _RELOCATE_LEVEL0 = ("fold", "grazing")
 
 
@@ -387,10 +465,11 @@ def bifurcation_levels(model, amplitude, bif, integrator, *, parameter="frequenc
                        max_levels=4, segments=1):
     """Locate the bifurcation ``bif`` (a continuation.Bifurcation of a diagram computed with
     ``integrator``) at levels 1, 2, ... until the stated error is at most 10^-digits |value|
-    (at least one level, at most ``max_levels``); folds, and grazing points whose bracket is
-    wider than half the target, at level 0 too (their diagram values come from another
-    criterion or a wider bracket); one reported at a grazing point (``smooth`` False) as a
-    grazing point. Returns a
+    (at least one level, at most ``max_levels``); folds of a diagram without stability, and
+    folds and grazing points whose bracket is wider than half the target, at level 0 too
+    (their diagram values come from another criterion or a wider bracket; see
+    _RELOCATE_LEVEL0); one reported at a grazing point (``smooth`` False) as a grazing
+    point. Returns a
     BifurcationLevels; a level that does not converge ends the sequence (``failed`` says why;
     with fewer than two levels the error is NaN, except at a grazing point: the width of the
     diagram's bracket, which holds it)."""
@@ -400,9 +479,9 @@ def bifurcation_levels(model, amplitude, bif, integrator, *, parameter="frequenc
     # a bifurcation reported at a grazing point (a multiplier jumps there) is located as one
     kind = bif.kind if getattr(bif, "smooth", True) else "grazing"
     relocate = kind in _RELOCATE_LEVEL0
-    if kind == "grazing" and math.isfinite(bif.tolerance) \
-            and bif.tolerance <= 0.5 * 10.0 ** -digits * abs(p):
-        relocate = False  # the diagram's bracket is narrow enough
+    narrow = math.isfinite(bif.tolerance) and bif.tolerance <= 0.5 * 10.0 ** -digits * abs(p)
+    if narrow and (kind == "grazing" or bif.multipliers is not None):
+        relocate = False  # the diagram's bracket is narrow enough (a fold: see above)
     values = [] if relocate else [p]
     value, error = p, float("nan")
     failed = ""
@@ -566,8 +645,68 @@ def _levels_job(args):
     return bifurcation_levels(model, amplitude, bf, integrator, **kw)
 
 
+class Early:
+    """Error estimates started on a pool while the diagram is still being traced (continuation
+    .diagram submits each branch and bifurcation as it is added); ``estimate_diagram`` takes a
+    result only where its inputs are still those it was started with (``_job_key``; a grazing
+    point's bracket may be widened by a later merge), so the numbers are those of the serial
+    estimate."""
+
+    def __init__(self, pool, model, integrator, parameter, accuracy, segments, every=10,
+                 max_levels=4, grazing_levels=1):
+        self.pool, self.model, self.integrator = pool, model, integrator
+        self.parameter, self.segments, self.every = parameter, segments, every
+        self.digits = target_digits(accuracy)
+        self.max_levels, self.grazing_levels = max_levels, grazing_levels
+        self.branches = {}  # branch index -> (branch, future)
+        self.levels = {}  # _job_key -> future
+
+    def branch(self, index, branch, bifurcations):
+        """Start the estimate of a Branch just added, with its bifurcations (it is not changed
+        afterwards; its corners are taken from ``bifurcations``, see corner_indices)."""
+        corners = corner_indices(branch, bifurcations, index)
+        self.branches[index] = (branch, corners, self.pool.submit(
+            _branch_job, (self.model, branch, self.integrator, self.every, corners)))
+
+    def bifurcation(self, amplitude, bf):
+        """Start locating a Bifurcation just added at the finer levels (a copy: the diagram
+        may still change its bracket, which changes its key)."""
+        if bf.kind not in KINDS_LOCATED:
+            return
+        bf = copy.copy(bf)
+        g = _at_grazing(bf)
+        key = _job_key(bf, g)
+        if key not in self.levels:
+            self.levels[key] = self.pool.submit(_levels_job, (
+                self.model, amplitude, bf, self.integrator,
+                self._levels_kw(g)))
+
+    def _levels_kw(self, grazing):
+        return dict(parameter=self.parameter, digits=self.digits, segments=self.segments,
+                    max_levels=self.grazing_levels if grazing else self.max_levels)
+
+    def close(self):
+        for _, _, fut in self.branches.values():
+            fut.cancel()
+        for fut in self.levels.values():
+            fut.cancel()
+
+
+def _at_grazing(bf):
+    return bf.kind == "grazing" or not getattr(bf, "smooth", True)
+
+
+def _job_key(bf, grazing):
+    """What bifurcation_levels computes from: bifurcations with equal keys get equal levels."""
+    def raw(a):
+        return None if a is None else np.asarray(a).tobytes()
+    return ("grazing" if grazing else bf.kind, bf.kind if not grazing else "", bf.order,
+            float(bf.value), float(bf.frequency), float(bf.tolerance), raw(bf.state0),
+            raw(bf.disc0), bf.multipliers is None)
+
+
 def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segments=1,
-                     max_levels=4, grazing_levels=1, pool=None):
+                     max_levels=4, grazing_levels=1, pool=None, early=None):
     """Attach error estimates to a diagram computed with ``integrator``, in place: each Branch
     gets xmax_error, multipliers_error and error_sampled (``branch_errors``); each fold, period
     doubling and Neimark-Sacker point is located again at levels 1, 2, ... (at most
@@ -586,9 +725,14 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segment
     mt = multiplier_target(digits)
     n_bad = n_tot = 0
     worst = None
-    errs = run(_branch_job, [(model, b, integrator, every,
-                              corner_indices(b, frc.bifurcations, bi))
-                             for bi, b in enumerate(frc.branches)])
+    early_b = early.branches if early is not None else {}
+    corners = [corner_indices(b, frc.bifurcations, bi) for bi, b in enumerate(frc.branches)]
+    todo = [bi for bi, b in enumerate(frc.branches)
+            if bi not in early_b or early_b[bi][0] is not b or early_b[bi][1] != corners[bi]]
+    errs = dict(zip(todo, run(_branch_job, [(model, frc.branches[bi], integrator, every,
+                                             corners[bi]) for bi in todo])))
+    errs = [errs[bi] if bi in errs else early_b[bi][2].result()
+            for bi in range(len(frc.branches))]
     for bi, (b, (xe, me, sm)) in enumerate(zip(frc.branches, errs)):
         b.xmax_error, b.multipliers_error, b.error_sampled = xe, me, sm
         if me is None or not sm.any():
@@ -601,13 +745,26 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segment
     failed, above = [], []
     located = [bf for bf in frc.bifurcations if bf.kind in KINDS_LOCATED]
 
-    def at_grazing(bf):
-        return bf.kind == "grazing" or not getattr(bf, "smooth", True)
-    levels = run(_levels_job, [
-        (model, frc.amplitude, bf, integrator,
-         dict(parameter=frc.parameter, digits=digits, segments=segments,
-              max_levels=grazing_levels if at_grazing(bf) else max_levels))
-        for bf in located])
+    at_grazing = _at_grazing
+    # a bifurcation at a grazing point is listed with the grazing point itself, and both are
+    # located as grazing points from the same orbit: each distinct job is run once
+    # (with ``early``: those started while the diagram was traced are taken where their
+    # inputs are unchanged)
+    started = early.levels if early is not None else {}
+    jobs, index = [], {}
+    for bf in located:
+        key = _job_key(bf, at_grazing(bf))
+        if key not in index and key not in started:
+            index[key] = len(jobs)
+            jobs.append((model, frc.amplitude, bf, integrator,
+                         dict(parameter=frc.parameter, digits=digits, segments=segments,
+                              max_levels=grazing_levels if at_grazing(bf) else max_levels)))
+    done = run(_levels_job, jobs)
+
+    def result(bf):
+        key = _job_key(bf, at_grazing(bf))
+        return done[index[key]] if key in index else started[key].result()
+    levels = [result(bf) for bf in located]
     bracketed = []
     for bf, lv in zip(located, levels):
         bf.levels = lv.values

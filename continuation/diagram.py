@@ -532,7 +532,9 @@ def _polished_starts(model, amplitude, frequency, parameter, orders, cand, segme
 
 def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer, integrator,
                  segments, n_grid, switch, starts, brute, variational=True, progress=None,
-                 pool=None):
+                 pool=None, early=None):
+    """early: a continuation.accuracy.Early that starts the error estimates of each branch and
+    bifurcation on the pool as it is added (while the next branches are traced)."""
     branches, bifs, pd_points = [], [], []
     ahead = None if pool is None or pool.serial else Speculator(pool)  # continuation.parallel
     t_start = time.perf_counter()
@@ -564,6 +566,10 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
             bifs.append(bf)
             if L.kind == "period-doubling":
                 pd_points.append((L.point, order, bi if bf.smooth else None))
+        if early is not None:  # (once all are added: a grazing point may absorb the next)
+            for bf in bifs[n_bifs:]:
+                early.bifurcation(amplitude, bf)
+            early.branch(bi, br, bifs)
         lo, hi = float(np.min(br.frequency)), float(np.max(br.frequency))
         say(f"branch {bi + 1} (order {order}, {origin}): {lo:.6g}-{hi:.6g} Hz, "
             f"{len(br.values)} points, {len(bifs) - n_bifs} bifurcations, ends: "
@@ -950,7 +956,9 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
     a Dask scheduler address or distributed.Client (nlbeam.pool): the brute-force sweeps,
     branches and error estimates run in parallel, with exactly the serial result (branches
     are traced ahead of their turn and taken only where the serial trace would have been the
-    same, continuation.parallel).
+    same, continuation.parallel; the error estimates of each branch and bifurcation start as
+    it is added, while the next ones are traced, and are taken where their inputs are still
+    the same, continuation.accuracy.Early).
     Returns a FrequencyResponse (``settings['stability']`` says which).
     """
     _args.check_integrator("frequency_response", integrator, integrator_kw,
@@ -968,11 +976,17 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
                     max_points=max_points, tol=tol, bif_tol=bif_tol)
     t0 = time.perf_counter()
     pool = Pool(workers, scheduler)
+    early = None
+    if not pool.serial and not (isinstance(accuracy, str) and accuracy == "off"):
+        from .accuracy import Early
+
+        early = Early(pool, model, integrator, "frequency", accuracy, segments)
     try:
         branches, bifs, _ = _run_diagram(model, amplitude, (f_lo, f_hi), orders, "frequency", None,
                                          tracer, integrator, segments, n_grid,
                                          switch and stability, list(starts), brute_force_grid,
-                                         variational=stability, progress=progress, pool=pool)
+                                         variational=stability, progress=progress, pool=pool,
+                                         early=early)
         _warn_coverage(branches, (f_lo, f_hi), orders, "frequency", "Hz",
                        "try a start inside it (starts=[(f, order, state0)], e.g. from "
                        "periodic_solution), a finer brute-force grid (n_grid), finer integration "
@@ -986,10 +1000,12 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
                                                         max_angle, tol, bif_tol, orders),
                                               stability=int(bool(stability))))
         frc.n_points = int(sum(len(b.values) for b in branches))
-        _estimate(frc, model, integrator, accuracy, segments, progress, pool)
+        _estimate(frc, model, integrator, accuracy, segments, progress, pool, early)
         frc.wall_time = time.perf_counter() - t0
         return frc
     finally:
+        if early is not None:
+            early.close()
         pool.close()
 
 
@@ -1046,7 +1062,7 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
     return frc
 
 
-def _estimate(frc, model, integrator, accuracy, segments, progress, pool=None):
+def _estimate(frc, model, integrator, accuracy, segments, progress, pool=None, early=None):
     """Error estimates of the diagram's points and bifurcations (continuation.accuracy), one
     ContinuationWarning listing what misses the target; settings['accuracy'] says which."""
     if isinstance(accuracy, str) and accuracy == "off":
@@ -1058,7 +1074,7 @@ def _estimate(frc, model, integrator, accuracy, segments, progress, pool=None):
     frc.settings["accuracy"] = digits
     t = time.perf_counter()
     notes = estimate_diagram(frc, model, integrator, accuracy=accuracy, segments=segments,
-                             pool=pool)
+                             pool=pool, early=early)
     if progress is not None:
         progress(f"error estimates: {len(frc.bifurcations)} bifurcations, "
                  f"{sum(int(b.error_sampled.sum()) for b in frc.branches)} branch points "

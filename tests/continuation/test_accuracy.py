@@ -234,3 +234,24 @@ def test_piecewise_linear_stop_grazing_and_xmax_against_the_exact_linear_solutio
         np.testing.assert_array_equal(b0.multipliers_error, b1.multipliers_error)
         np.testing.assert_array_equal(b0.error_sampled, b1.error_sampled)
     assert [b.error for b in back.bifurcations] == [b.error for b in frc.bifurcations]
+
+
+def test_fold_by_the_slope_is_the_turning_point_of_p_alone():
+    """Paper model, the fold near 21.7321 Hz located again at level 1: by the secant method
+    on dp/ds from the map's own Jacobian (accuracy._fold_turning_point) and as the vertex of
+    p along the branch from values of p alone (accuracy._vertex_along, no Jacobian in the
+    criterion): the same turning point, moved from the diagram's by the finer step."""
+    from continuation.accuracy import _fold_turning_point, _problem_at, _vertex_along
+
+    frc = C.frequency_response(PAPER, 1e-4, (21.6, 21.9), orders=(1,), n_grid=4,
+                               accuracy="off")
+    bf = _bifurcation(frc, "fold", 21.7321)
+    prob, u, p = _problem_at(PAPER, 1e-4, bf, "frequency", Integrator().refined(1), 1)
+    p_slope, _ = _fold_turning_point(prob, u, p)
+    w, wp = prob.scale_u, prob.scale_p
+    ev = prob.evaluate(u, p, jac=True, jac_p=True)
+    jp = ev.Jp * wp / w
+    t = np.linalg.svd(np.hstack([ev.Ju * w[None, :] / w[:, None], jp[:, None]]))[2][-1]
+    p_vertex = _vertex_along(prob, np.r_[u / w, p / wp], t, jp, 1e-4, 1e-10)[-1] * wp
+    assert abs(p_slope - p_vertex) <= 1e-10 * p
+    assert abs(p_slope - p) > 1e-8 * p  # the finer step moved it (6.6e-8 relative)
