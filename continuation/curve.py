@@ -16,6 +16,8 @@ import numpy as np
 
 import nlbeam
 
+from nlbeam.parameters import check_parameter, get_parameter, parameter_names, with_parameter
+
 from ._newton import ContinuationWarning, ConvergenceError
 from .extended import KINDS, CurveSystem
 from .pathfollow import test_functions
@@ -410,11 +412,9 @@ def _detector(tr, special):
 def _point_error(model, sysm, amplitude, pt, integrator, segments, tol):
     """Twice the change of the point's frequency (Hz) when it is located again at its
     second-parameter value with both steps halved (NaN, with a warning, if that fails)."""
-    import dataclasses
-
     A = pt.value if sysm.parameter == "amplitude" else amplitude
-    m = model if sysm.parameter == "amplitude" else dataclasses.replace(
-        model, **{sysm.parameter: pt.value})
+    m = model if sysm.parameter == "amplitude" else with_parameter(model, sysm.parameter,
+                                                                     pt.value)
     try:
         s2 = CurveSystem(m, sysm.kind, sysm.order, A, pt.frequency, pt.state0, sysm.parameter,
                          integrator.refined(1), segments=segments,
@@ -442,17 +442,12 @@ def _check_range(name, rng, unit, lo_open=0.0):
 
 
 def _check_parameter(model, parameter):
-    if parameter == "amplitude":
-        return
-    import dataclasses
-
-    names = [f.name for f in dataclasses.fields(model) if f.init
-             and isinstance(getattr(model, f.name), (int, float))
-             and not isinstance(getattr(model, f.name), bool)] if \
-        dataclasses.is_dataclass(model) else []
-    if parameter not in names:
-        raise ValueError(f"parameter: must be 'amplitude' or a numeric parameter of the model "
-                         f"({', '.join(names) or 'none'}), got {parameter!r}")
+    """'amplitude' or a name of nlbeam.parameters (the error lists the names that exist)."""
+    if parameter == "frequency":
+        raise ValueError("parameter: the frequency is the curve's first parameter; give the "
+                         "second one: 'amplitude' or " + ", ".join(
+                             repr(n) for n in parameter_names(model)))
+    check_parameter(model, parameter, extra=("amplitude",))
 
 
 def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter="amplitude",
@@ -466,7 +461,8 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     'fold', 'period-doubling', 'neimark-sacker' or 'grazing', with its state0 and order), or a
     dict with keys kind, frequency (Hz), order, state0 (and optionally disc0). amplitude: the
     diagram's excitation amplitude (m or N); parameter: the second parameter, 'amplitude'
-    (default) or a numeric field of the model ('e', 'K_hertz', 'b', ...), continued together
+    (default) or any name of nlbeam.parameters (a model field 'e', 'K_hertz', 'b', 'm', 'k';
+    an element parameter of a general System 'elements[0].gap', ...), continued together
     with the frequency along the curve; p_range: (lo, hi) of that parameter, which must hold
     the start's value; f_range: (lo, hi) Hz (default: 0.2-5 times the start frequency).
     at: second-parameter values at which exact curve points are placed (BifurcationCurve.at).
@@ -507,7 +503,7 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     amplitude = float(amplitude)
     _check_parameter(model, parameter)
     p_lo, p_hi = _check_range("p_range", p_range, "(units of the parameter)")
-    p0 = amplitude if parameter == "amplitude" else float(getattr(model, parameter))
+    p0 = amplitude if parameter == "amplitude" else get_parameter(model, parameter)
     if not p_lo <= p0 <= p_hi:
         raise ValueError(f"p_range: must hold the start's {parameter} = {p0:.6g}, got {p_range!r}")
     if parameter == "amplitude" and p_lo <= 0:

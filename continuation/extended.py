@@ -26,6 +26,8 @@ import math
 
 import numpy as np
 
+from nlbeam.parameters import get_parameter, with_parameter
+
 from ._newton import ConvergenceError
 from .shooting import _problem_from_state, event_elements
 
@@ -86,8 +88,8 @@ class CurveState:
 
 class CurveSystem:
     """The extended system G(z) = 0 (D - 1 equations, D unknowns) of one bifurcation kind of
-    the orbits of one order; module doc. parameter: 'amplitude' or a field of the model
-    (dataclasses.replace: 'e', 'K_hertz', 'b', ...)."""
+    the orbits of one order; module doc. parameter: 'amplitude' or any name of
+    nlbeam.parameters ('e', 'K_hertz', 'b', 'elements[0].gap', ...)."""
 
     def __init__(self, model, kind, order, amplitude, frequency, state0, parameter, integrator, *,
                  disc0=None, segments=1, element=None, phase=None):
@@ -98,7 +100,7 @@ class CurveSystem:
         self.amplitude0 = float(amplitude)
         self.prob, u0 = _problem_from_state(model, amplitude, frequency, order, state0, segments,
                                             integrator, disc0=disc0)
-        p0 = self.amplitude0 if parameter == "amplitude" else float(getattr(model, parameter))
+        p0 = self.amplitude0 if parameter == "amplitude" else get_parameter(model, parameter)
         self.log_p = parameter == "amplitude" or p0 > 0
         self.p_scale = 1.0 if self.log_p else max(abs(p0), 1.0)
         self._model_cache = (p0, model)
@@ -130,7 +132,7 @@ class CurveSystem:
             return
         key, m = self._model_cache
         if key != p:
-            m = dataclasses.replace(self.model0, **{self.parameter: float(p)})
+            m = with_parameter(self.model0, self.parameter, float(p))
             self._model_cache = (p, m)
         prob.base_model = m
 

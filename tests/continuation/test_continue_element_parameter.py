@@ -79,3 +79,55 @@ def test_a_name_that_does_not_exist_lists_those_that_do():
     assert m2.element_geometry()[3][0] == 0.2  # the arrays the kernels read follow
     beam = with_parameter(nlbeam.BeamImpact(), "gap", 1e-4)
     assert beam.system.element_geometry()[3][0] == 1e-4 and beam.gap == 1e-4
+
+
+@pytest.mark.slow  # 30 s CPU
+def test_a_period_doubling_curve_in_frequency_and_gap_agrees_with_diagrams_at_fixed_gaps():
+    """bifurcation_curve with the stop's gap (``elements[0].gap``) as the second parameter:
+    the period-doubling curve of the order-1 orbit in (f, gap), traced from the diagram at
+    gap 0.19, is U-shaped (two period doublings at each gap in 0.17-0.22). At three fixed gaps
+    its two frequencies agree with the closed-form period doublings of tests/exact_pwl.py
+    (exact piecewise-linear flow, det(M + I) = 0) and with nlbeam's frequency diagram at that
+    gap, within the sum of the stated errors (curve: BifurcationCurve.error; diagram:
+    Bifurcation.error). Measured: |curve - exact| up to 4e-8 Hz against stated curve errors
+    0.5e-8 to 7e-8 Hz (30 s CPU)."""
+    import exact_pwl
+
+    g0, gaps = 0.19, (0.17, 0.2, 0.22)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ContinuationWarning)
+        d0 = continuation.frequency_response(_model(g0), F, (0.10, 0.14), orders=(1,))
+    pd = [b for b in d0.bifurcations if b.kind == "period-doubling"][0]
+    c = continuation.bifurcation_curve(_model(g0), pd, (0.15, 0.23), amplitude=F,
+                                       parameter="elements[0].gap", f_range=(0.09, 0.16),
+                                       at=gaps)
+    assert c.parameter == "elements[0].gap" and c.ends == ("left the parameter range",) * 2
+    for g in gaps:
+        f_curve, err = c.at(g), c.error_at(g)
+        assert len(f_curve) == 2 and np.all(np.isfinite(err)), (g, f_curve, err)
+        osc = exact_pwl.StopOscillator(1.0, 0.1, 1.0, 4.0, g, F)
+        exact = exact_pwl.trace(osc, 0.10, exact_pwl.free_orbit_state(osc, 0.10), 0.10, 0.14)
+        assert len(exact.period_doublings) == 2
+        for f_ex in exact.period_doublings:
+            j = int(np.argmin(np.abs(f_curve - f_ex)))
+            assert abs(f_curve[j] - f_ex) <= err[j] + 1e-12 * f_ex, (g, f_curve[j], f_ex, err[j])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ContinuationWarning)
+            d = continuation.frequency_response(_model(g), F, (0.10, 0.14), orders=(1,))
+        f_diag = [(b.frequency, b.error) for b in d.bifurcations
+                  if b.kind == "period-doubling" and b.order == 1]
+        assert len(f_diag) == 2, (g, f_diag)
+        for f_d, e_d in f_diag:
+            j = int(np.argmin(np.abs(f_curve - f_d)))
+            assert abs(f_curve[j] - f_d) <= err[j] + e_d, (g, f_curve[j], f_d, err[j], e_d)
+
+
+def test_bifurcation_curve_names_the_parameters_that_exist():
+    m = _model(0.1)
+    bf = {"kind": "fold", "frequency": F0, "order": 1, "state0": [0.1, 0.0]}
+    with pytest.raises(ValueError) as err:
+        continuation.bifurcation_curve(m, bf, (0.0, 1.0), amplitude=F, parameter="gap")
+    msg = str(err.value)
+    assert "'gap'" in msg and "amplitude, elements[0].k, elements[0].gap" in msg
+    with pytest.raises(ValueError, match="first parameter"):
+        continuation.bifurcation_curve(m, bf, (0.0, 1.0), amplitude=F, parameter="frequency")
