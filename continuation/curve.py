@@ -206,9 +206,16 @@ class _Tracer:
         perpendicular to it, the frequency)."""
         s = self.s
         z0 = s.z0
-        row = np.zeros(s.D)
-        row[s.n + 1] = 1.0
-        st, _ = self.correct(z0, row, z0[s.n + 1])
+        try:  # at the start's second-parameter value
+            row = np.zeros(s.D)
+            row[s.n + 1] = 1.0
+            st, _ = self.correct(z0, row, z0[s.n + 1])
+        except ConvergenceError:
+            # a curve along the frequency axis (the locus does not depend on the frequency,
+            # e.g. a linear structure's flutter): at the start's frequency instead
+            row = np.zeros(s.D)
+            row[s.n] = 1.0
+            st, _ = self.correct(z0, row, z0[s.n])
         t = _null(st.J)
         k = s.n + 1 if abs(t[s.n + 1]) > 1e-8 else s.n
         if np.sign(t[k]) != direction:
@@ -243,6 +250,21 @@ class _Tracer:
         if not hits:
             return None
         return min(hits)[1:]
+
+    def _next_ds(self, ds, it, cos_turn):
+        """The next step from the last one's corrector iterations and the angle the tangent
+        turned: the step is scaled so the tangent turns by about a third of max_angle
+        (at most doubled, at least halved); shrunk when the quasi-Newton corrector needed 9
+        iterations or more, not grown when it needed more than 7 (it converges linearly:
+        5-7 iterations are its usual count, which a count-only rule read as too slow)."""
+        turn = math.acos(min(1.0, max(-1.0, cos_turn)))
+        target = math.acos(self.cos_max) / 3.0
+        factor = min(2.0, max(0.5, target / max(turn, 1e-3)))
+        if it >= 9:
+            factor = min(factor, 0.6)
+        elif it > 7:
+            factor = min(factor, 1.0)
+        return min(max(ds * factor, self.ds_min), self.ds_max)
 
     def trace(self, p0, on_step):
         """Points from p0 (excluded) on, and the reason the trace stopped. on_step(a, b):
@@ -310,10 +332,7 @@ class _Tracer:
                 pts[-1] = b
             else:
                 s.renew_borders(b.st.z)
-            if it <= 4:  # quasi-Newton iterations: a few more than Newton's
-                ds = min(ds * 1.5, self.ds_max)
-            elif it >= 8:
-                ds = max(ds * 0.6, self.ds_min)
+            ds = self._next_ds(ds, it, t @ a.t)
             a = b
 
 
