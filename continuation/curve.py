@@ -152,16 +152,18 @@ class _Tracer:
         self.max_evaluations = None
 
     # corrector: Newton on G(z) = 0 with one more equation c(z) = 0 (linear: row . z = rhs)
-    def correct(self, z, row, rhs, J=None):
+    def correct(self, z, row, rhs, J=None, jac=True):
         """Newton on G(z) = 0 with the linear condition row . z = rhs; a quasi-Newton
         iteration from the Jacobian J given (the previous point's) with Broyden's rank-one
-        updates, the Jacobian renewed when an iterate does not halve the residual. Returns
-        (CurveState at the solution, with its Jacobian; iterations)."""
+        updates, the Jacobian renewed when an iterate does not halve the residual (given up
+        at the third renewal: the predictor is too far for the step to pay). Returns
+        (CurveState at the solution, with its Jacobian unless jac=False; iterations)."""
         s = self.s
         res_prev = np.inf
         A = None if J is None else np.vstack([J, row[None, :]])
         fresh = J is None
         F_prev = dz = None
+        renewals = 0
         for it in range(self.max_iter):
             st = s.evaluate(z, jac=A is None)
             F = np.r_[st.G, row @ z - rhs]
@@ -173,8 +175,11 @@ class _Tracer:
             if not np.isfinite(res):
                 break
             if res <= self.tol:
-                return (st if st.J is not None else s.evaluate(z)), it
+                return (st if st.J is not None or not jac else s.evaluate(z)), it
             if not fresh and res > 0.5 * res_prev:
+                renewals += 1
+                if renewals > 2:  # stalls with fresh Jacobians too: the step was too long
+                    break
                 A, dz = None, None  # stalls: a new Jacobian here
                 continue
             res_prev = res
@@ -273,6 +278,7 @@ class _Tracer:
         pts = []
         a = p0
         ds = self.ds0
+        ds_fail = None  # the last step that failed (growth stays below it for a while)
         n0 = s.n_evaluations
         z_start = p0.st.z
         while True:
@@ -287,6 +293,7 @@ class _Tracer:
                 if t @ a.t < self.cos_max:
                     raise ConvergenceError("angle")
             except ConvergenceError:
+                ds_fail = ds
                 ds *= 0.5
                 if ds < self.ds_min:
                     return pts, "step underflow"
@@ -333,6 +340,9 @@ class _Tracer:
             else:
                 s.renew_borders(b.st.z)
             ds = self._next_ds(ds, it, t @ a.t)
+            if ds_fail is not None:  # not back to a step that failed: grow below it
+                ds = min(ds, 0.7 * ds_fail)
+                ds_fail = ds_fail * 1.2 if ds_fail * 1.2 < self.ds_max else None
             a = b
 
 
@@ -340,35 +350,54 @@ def _side(v):
     return bool(v) if isinstance(v, (bool, np.bool_)) else v > 0
 
 
-def _locate(tr, a, b, fun, iters=40, rel=1e-9):
+def _locate(tr, a, b, fun, iters=40, rel=1e-9, tangent=False):
     """The point between curve points a and b where fun(point) changes sign (fun: of a
-    CurveState and its unit tangent), by bisection on the arclength along the chord. Returns
-    (point, bracket half-width (frequency Hz, value)). fun may return a float or a bool."""
+    CurveState and its unit tangent), along the chord: a continuous fun by regula falsi
+    with the Illinois modification (superlinear; the bracket shrinks from both sides), a
+    bool by bisection; each trial point corrected onto the curve on the plane normal to the
+    chord (its Jacobian only when ``tangent``: fun reads the tangent). Returns (point,
+    bracket half-width (frequency Hz, value)): the final bracket, which holds the zero of fun
+    on the corrected curve (its integration error is not in it)."""
     za, zb = a.st.z, b.st.z
     d = zb - za
     L = float(np.linalg.norm(d))
     if L == 0:
         return a, (0.0, 0.0)
     e = d / L
-    fa = fun(a.st, a.t)
+    fa, fb = fun(a.st, a.t), fun(b.st, b.t)
+    continuous = not isinstance(fa, (bool, np.bool_))
     lo, hi = 0.0, L
+    flo, fhi = (float(fa), float(fb)) if continuous else (None, None)
     best = a
     plo, phi = a, b
+    kept = 0  # Illinois: which end was kept last (-1 lo, +1 hi), twice in a row halves it
     for _ in range(iters):
         mid = 0.5 * (lo + hi)
+        if continuous and flo != fhi and math.isfinite(flo) and math.isfinite(fhi):
+            mid = (lo * fhi - hi * flo) / (fhi - flo)
+            w = 1e-3 * (hi - lo)  # strictly inside
+            mid = min(max(mid, lo + w), hi - w)
         try:
-            st, _ = tr.correct(za + mid * e, e, e @ za + mid, a.st.J)
+            st, _ = tr.correct(za + mid * e, e, e @ za + mid, a.st.J, jac=tangent)
         except ConvergenceError:
             break
-        t = _tangent(st.J, a.t)
+        t = _tangent(st.J, a.t) if st.J is not None else e
         pm = tr.make_point(st, t)
         fm = fun(st, t)
+        best = pm
         if _side(fm) == _side(fa):
             lo, plo = mid, pm
+            if continuous:
+                flo = float(fm)
+                fhi = 0.5 * fhi if kept == -1 else fhi
+            kept = -1
         else:
             hi, phi = mid, pm
-        best = pm
-        if hi - lo <= rel * L + 1e-12:
+            if continuous:
+                fhi = float(fm)
+                flo = 0.5 * flo if kept == 1 else flo
+            kept = 1
+        if hi - lo <= rel * L + 1e-12 or (continuous and fm == 0):
             break
     ef = 0.5 * abs(phi.frequency - plo.frequency)
     ev = 0.5 * abs(phi.value - plo.value)
@@ -397,8 +426,8 @@ def _detector(tr, special):
         if kind == "fold":
             kf, kp = s.n, s.n + 1
             if a.t[kf] * b.t[kf] < 0 and a.t[kp] * b.t[kp] < 0:
-                pt, (ef, ev) = _locate(tr, a, b, lambda st, t: t[kp])
-                pt2, _ = _locate(tr, a, b, lambda st, t: t[kf])
+                pt, (ef, ev) = _locate(tr, a, b, lambda st, t: t[kp], tangent=True)
+                pt2, _ = _locate(tr, a, b, lambda st, t: t[kf], tangent=True)
                 ef = max(ef, abs(pt2.frequency - pt.frequency))
                 ev = max(ev, abs(pt2.value - pt.value))
                 special.append(Codim2("cusp", pt.frequency, pt.value, ef, ev, index))

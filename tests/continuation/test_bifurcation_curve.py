@@ -195,7 +195,7 @@ def test_curve_in_frequency_and_restitution_agrees_with_diagrams(paper_pd_curve)
 
 
 @pytest.mark.parametrize("kw, match", [
-    ({"parameter": "gap_mm"}, "parameter: must be 'amplitude' or a numeric parameter"),
+    ({"parameter": "gap_mm"}, "parameter: 'gap_mm' is not a parameter.*amplitude, m, b, k, k3"),
     ({"p_range": (2e-4, 5e-4)}, "p_range: must hold the start's amplitude"),
     ({"p_range": (0.0, 1.0)}, "p_range: amplitudes must be > 0"),
     ({"f_range": (60.0, 70.0)}, "f_range: must hold the start frequency"),
