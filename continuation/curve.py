@@ -33,7 +33,10 @@ class Codim2:
     'fold-grazing' / 'flip-grazing' / 'neimark-sacker-grazing' (the curve meets a grazing
     curve: the number of impacts per period changes along it; on a grazing curve, a multiplier
     crosses +1 / -1 there). frequency (Hz), value (second parameter); error_frequency,
-    error_value: half the width of the final bracket along the curve (for a cusp also the
+    error_value: half the width of the final bracket along the curve (regula falsi on the
+    test function; bisection for a change of impacts) plus, for a fold-flip or a fold / flip
+    point on a grazing curve located with error=True, twice its move when it is located
+    again with both steps halved (the integration error); (for a cusp also the
     distance between where the curve turns in frequency and where it turns in the second
     parameter); index: the curve point before it."""
 
@@ -416,7 +419,9 @@ def _other_tests(kind, mu):
     return out
 
 
-def _detector(tr, special):
+def _detector(tr, special, tests):
+    """on_step for the tracer: appends the Codim2 points met to ``special``, and (Codim2,
+    located point, test name) of those located on a continuous test function to ``tests``."""
     s = tr.s
     kind = s.kind
 
@@ -444,7 +449,9 @@ def _detector(tr, special):
                         what = "fold-flip"
                     else:
                         continue
-                    special.append(Codim2(what, pt.frequency, pt.value, ef, ev, index))
+                    c2 = Codim2(what, pt.frequency, pt.value, ef, ev, index)
+                    special.append(c2)
+                    tests.append((c2, pt, name))
         # the number of impacts per period changes: the curve meets a grazing curve
         if kind != "grazing" and sa.n_impacts != sb.n_impacts:
             pt, (ef, ev) = _locate(tr, a, b, lambda st, t: st.n_impacts == sa.n_impacts,
@@ -476,6 +483,39 @@ def _point_error(model, sysm, amplitude, pt, integrator, segments, tol):
                       f"{sysm.parameter} = {pt.value:.6g}: not located with the step halved "
                       f"({exc})", ContinuationWarning, stacklevel=3)
         return float("nan")
+
+
+def _codim2_error(model, sysm, amplitude, c2, pt, name, integrator, segments, tol):
+    """Add the integration error to a codimension-2 point's bracket errors (in place): the
+    curve is solved with both steps halved at the point's value and at a value 1e-4 (relative)
+    beside it, the test function's zero placed by the secant through the two, and twice the
+    move of (frequency, value) added to (error_frequency, error_value). A failure leaves the
+    bracket errors and says so in the point's note."""
+    v0 = pt.value
+    out = []
+    try:
+        for v in (v0, v0 * (1 + 1e-4) if v0 != 0 else 1e-8):
+            A = v if sysm.parameter == "amplitude" else amplitude
+            m = model if sysm.parameter == "amplitude" else with_parameter(
+                model, sysm.parameter, v)
+            s2 = CurveSystem(m, sysm.kind, sysm.order, A, pt.frequency, pt.state0,
+                             sysm.parameter, integrator.refined(1), segments=segments,
+                             element=getattr(sysm, "element", None),
+                             phase=None if math.isnan(pt.phase) else pt.phase)
+            tr = _Tracer(s2, (0.5 * pt.frequency, 2 * pt.frequency), (-np.inf, np.inf), (),
+                         0.05, 1e-6, 0.3, 0.3, 1, tol, 10)
+            p = tr.start(1)
+            out.append((p.frequency, p.value, _other_tests(sysm.kind, p.st.multipliers)[name]))
+    except (ConvergenceError, nlbeam.IntegrationError) as exc:
+        c2.note = (c2.note + "; " if c2.note else "") + f"no integration error estimate ({exc})"
+        return
+    (f0, w0, g0), (f1, w1, g1) = out
+    if g1 == g0:
+        c2.note = (c2.note + "; " if c2.note else "") + "no integration error estimate"
+        return
+    r = -g0 / (g1 - g0)
+    c2.error_frequency += 2.0 * abs(f0 + r * (f1 - f0) - c2.frequency)
+    c2.error_value += 2.0 * abs(w0 + r * (w1 - w0) - c2.value)
 
 
 # --- front door -----------------------------------------------------------------------------------
@@ -583,14 +623,14 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
             raise ValueError(f"max_evaluations: must be an integer >= 1 or None, got "
                              f"{max_evaluations!r}")
         tr.max_evaluations = int(max_evaluations)
-    special = []
+    special, tests = [], []
     halves, ends = [], []
     snapshot = sysm.snapshot()
     for d in directions:
         # each direction from the start (the problem may have been rephased by the other)
         sysm.restore(snapshot)
         start = tr.start(d)
-        pts, why = tr.trace(start, _detector(tr, special))
+        pts, why = tr.trace(start, _detector(tr, special, tests))
         halves.append((start, pts))
         ends.append(why)
         if why == "closed":
@@ -620,6 +660,9 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
         for i, p in enumerate(pts):
             if p.exact and (p is pts_start or any(abs(p.value - a) <= 1e-9 * abs(a) for a in at)):
                 err[i] = _point_error(model, sysm, amplitude, p, integrator, segments, tol)
+    if error:
+        for c2, pt, name in tests:
+            _codim2_error(model, sysm, amplitude, c2, pt, name, integrator, segments, tol)
     special.sort(key=lambda c: (c.value, c.frequency))
     for c in special:  # the curve point nearest to it
         c.index = int(np.argmin(np.hypot(np.log(f / c.frequency), (v - c.value) / (

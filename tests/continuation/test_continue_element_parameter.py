@@ -131,3 +131,61 @@ def test_bifurcation_curve_names_the_parameters_that_exist():
     assert "'gap'" in msg and "amplitude, elements[0].k, elements[0].gap" in msg
     with pytest.raises(ValueError, match="first parameter"):
         continuation.bifurcation_curve(m, bf, (0.0, 1.0), amplitude=F, parameter="frequency")
+
+
+def _two_oscillators(gap):
+    """Two uncoupled oscillators forced together (F = 0.1 N on each): a Duffing
+    x1'' + 0.1 x1' + 0.18 x1 + x1^3 (a fold near 0.117 Hz) and the stop oscillator of this
+    module on x2, whose period doublings in (f, gap) are U-shaped. The monodromy is block
+    diagonal: the Duffing's fold curve is the line f = f_fold in (f, gap), and it meets the
+    stop oscillator's period-doubling curve in fold-flip points."""
+    els = (nlbeam.CubicSpring(0, k3=1.0), nlbeam.PiecewiseLinearStop(1, k=4.0, gap=gap))
+    return nlbeam.System(np.eye(2), 0.1 * np.eye(2), np.diag([0.18, 1.0]), els, "force",
+                         y_load=[1.0, 1.0], yd_load=[0.0, 0.0], output_dof=1)
+
+
+def test_fold_flip_points_where_a_fold_curve_meets_a_period_doubling_curve():
+    """The fold curve of the two oscillators in (f, elements[1].gap) meets two fold-flip
+    points; each is where the stop oscillator alone has a multiplier -1 at that frequency,
+    solved in closed form (tests/exact_pwl: det(M + I) = 0 in the gap, Brent), to the stated
+    error (bracket + integration error); the stop oscillator's diagram at that gap has a
+    period doubling at the fold's frequency. Measured: the gaps 0.1649073 and 0.2127250 agree
+    with the exact ones to 4e-8 and 1e-8 (bracket 1e-11)."""
+    import scipy.optimize
+
+    import exact_pwl
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ContinuationWarning)
+        d = continuation.frequency_response(_two_oscillators(0.2), F, (0.1, 0.13), orders=(1,))
+    fold = [b for b in d.bifurcations if b.kind == "fold"][0]
+    c = continuation.bifurcation_curve(_two_oscillators(0.2), fold, (0.15, 0.23), amplitude=F,
+                                       parameter="elements[1].gap", f_range=(0.1, 0.13))
+    ff = [p for p in c.special if p.kind == "fold-flip"]
+    assert len(ff) == 2, c.special
+    for p in ff:
+        assert abs(p.frequency - fold.frequency) <= 1e-6 * fold.frequency  # the line
+
+        def det(g, f=p.frequency):
+            osc = exact_pwl.StopOscillator(1.0, 0.1, 1.0, 4.0, g, F)
+            o = exact_pwl.orbit(osc, f, exact_pwl.free_orbit_state(osc, f))
+            return np.linalg.det(o.monodromy + np.eye(2))
+
+        g = scipy.optimize.brentq(det, p.value - 0.01, p.value + 0.01, xtol=1e-14)
+        assert abs(p.value - g) <= p.error_value, (p, g)
+        assert p.error_value <= 1e-6 * g  # located, not only bracketed
+        # one-parameter diagrams: the stop oscillator alone at that gap doubles its period
+        # at the fold's frequency (at the fold-flip gap the two oscillators' branch turns
+        # where the multiplier reaches -1, so their own diagram shows the fold only)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ContinuationWarning)
+            dg = continuation.frequency_response(_model(p.value), F, (0.11, 0.125),
+                                                 orders=(1,))
+        f = [(b.frequency, b.error) for b in dg.bifurcations if b.kind == "period-doubling"]
+        # the point's gap error moves the period doubling by slope * error_value (the slope
+        # df/dgap of det(M + I) = 0, from the closed form)
+        h = 1e-6
+        slope = -(det(g + h) - det(g - h)) / (det(g, p.frequency + h * 1e-2)
+                                              - det(g, p.frequency - h * 1e-2)) * 1e-2
+        assert min(abs(fb - p.frequency) - eb for fb, eb in f) <= p.error_frequency + \
+            fold.error + abs(slope) * p.error_value, (f, p, slope)
