@@ -159,7 +159,7 @@ class _Tracer:
         """Newton on G(z) = 0 with the linear condition row . z = rhs; a quasi-Newton
         iteration from the Jacobian J given (the previous point's) with Broyden's rank-one
         updates, the Jacobian renewed when an iterate does not halve the residual (given up
-        at the third renewal: the predictor is too far for the step to pay). Returns
+        at the second renewal: the predictor is too far for the step to pay). Returns
         (CurveState at the solution, with its Jacobian unless jac=False; iterations)."""
         s = self.s
         res_prev = np.inf
@@ -167,21 +167,27 @@ class _Tracer:
         fresh = J is None
         F_prev = dz = None
         renewals = 0
+        renewed = False  # a Jacobian was computed in this call
         for it in range(self.max_iter):
             st = s.evaluate(z, jac=A is None)
             F = np.r_[st.G, row @ z - rhs]
             if A is None:
                 A, fresh = np.vstack([st.J, row[None, :]]), True
+                renewed = True
             elif dz is not None:
                 A = A + np.outer(F - F_prev - A @ dz, dz) / (dz @ dz)  # Broyden
             res = float(np.max(np.abs(F)))
             if not np.isfinite(res):
                 break
             if res <= self.tol:
+                if st.J is None and jac and renewed:
+                    # a Jacobian computed in this call, updated since: good enough for the
+                    # tangent and the next corrector (saves D evaluations per point)
+                    st.J = A[:-1].copy()
                 return (st if st.J is not None or not jac else s.evaluate(z)), it
             if not fresh and res > 0.5 * res_prev:
                 renewals += 1
-                if renewals > 2:  # stalls with fresh Jacobians too: the step was too long
+                if renewals > 1:  # stalls with a fresh Jacobian too: the step was too long
                     break
                 A, dz = None, None  # stalls: a new Jacobian here
                 continue
@@ -340,7 +346,12 @@ class _Tracer:
                     t3 = -t3
                 b = self.make_point(st3, t3, b.exact)
                 pts[-1] = b
-            else:
+            elif it > 6:
+                # new borders only when the corrector struggled: the point's Jacobian, which
+                # starts the next corrector, holds the test function's row for the borders
+                # in use, and a renewal makes that row stale (measured on the paper chart's
+                # fold curves near 10 Hz: renewing at every point made the first quasi-Newton
+                # step raise the residual, a fresh Jacobian at every point, and failed steps)
                 s.renew_borders(b.st.z)
             ds = self._next_ds(ds, it, t @ a.t)
             if ds_fail is not None:  # not back to a step that failed: grow below it
