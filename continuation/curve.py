@@ -571,7 +571,7 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     max_iter (corrector), max_evaluations (shooting evaluations per direction, None: no
     limit; a trace that reaches it ends 'max_evaluations'). element, phase: for a grazing
     curve, the stop (element index) and excitation phase (periods) of the grazing contact
-    (default: the local maximum of the penetration closest to zero on the start orbit).
+    (default: the extremum of the penetration closest to zero on the start orbit).
     Integrator options as for periodic_solution (the diagram's integrator, for the curve to
     pass through its points). error: estimate the integration error of the frequency at the
     start and the ``at`` points (BifurcationCurve.error). Codimension-2 points met (Codim2:
