@@ -155,17 +155,19 @@ class _Tracer:
         self.max_evaluations = None
 
     # corrector: Newton on G(z) = 0 with one more equation c(z) = 0 (linear: row . z = rhs)
-    def correct(self, z, row, rhs, J=None, jac=True):
+    def correct(self, z, row, rhs, J=None, jac=True, radius=None):
         """Newton on G(z) = 0 with the linear condition row . z = rhs; a quasi-Newton
         iteration from the Jacobian J given (the previous point's) with Broyden's rank-one
         updates, the Jacobian renewed when an iterate does not halve the residual (given up
-        at the second renewal: the predictor is too far for the step to pay). Returns
+        at the second renewal: the predictor is too far for the step to pay; or when an
+        iterate lies farther than ``radius`` from the prediction z, scaled). Returns
         (CurveState at the solution, with its Jacobian unless jac=False; iterations)."""
         s = self.s
         res_prev = np.inf
         A = None if J is None else np.vstack([J, row[None, :]])
         fresh = J is None
         F_prev = dz = None
+        z_first = z
         renewals = 0
         renewed = False  # a Jacobian was computed in this call
         for it in range(self.max_iter):
@@ -205,6 +207,8 @@ class _Tracer:
             dz = c * step
             z = z + dz
             F_prev = F
+            if radius is not None and np.linalg.norm(z - z_first) > radius:
+                break  # wandering off the prediction (towards a neighbouring curve)
         raise ConvergenceError(f"{s.kind} curve: corrector did not converge near "
                                f"{s.point(z)[0]:.9g} Hz, {s.parameter} = {s.point(z)[1]:.6g}")
 
@@ -297,7 +301,7 @@ class _Tracer:
                 return pts, "max_evaluations"
             z_pred = a.st.z + ds * a.t
             try:
-                st, it = self.correct(z_pred, a.t, a.t @ z_pred, a.st.J)
+                st, it = self.correct(z_pred, a.t, a.t @ z_pred, a.st.J, radius=ds)
                 t = _tangent(st.J, a.t)
                 if t @ a.t < self.cos_max:
                     raise ConvergenceError("angle")
