@@ -155,12 +155,12 @@ class _Tracer:
         self.max_evaluations = None
 
     # corrector: Newton on G(z) = 0 with one more equation c(z) = 0 (linear: row . z = rhs)
-    def correct(self, z, row, rhs, J=None, jac=True, radius=None):
+    def correct(self, z, row, rhs, J=None, jac=True, radius=None, max_renewals=None):
         """Newton on G(z) = 0 with the linear condition row . z = rhs; a quasi-Newton
         iteration from the Jacobian J given (the previous point's) with Broyden's rank-one
         updates, the Jacobian renewed when an iterate does not halve the residual (given up
-        at the second renewal: the predictor is too far for the step to pay; or when an
-        iterate lies farther than ``radius`` from the prediction z, scaled). Returns
+        after ``max_renewals`` renewals: the predictor is too far for the step to pay; or when
+        an iterate lies farther than ``radius`` from the prediction z, scaled). Returns
         (CurveState at the solution, with its Jacobian unless jac=False; iterations)."""
         s = self.s
         res_prev = np.inf
@@ -189,8 +189,8 @@ class _Tracer:
                 return (st if st.J is not None or not jac else s.evaluate(z)), it
             if not fresh and res > 0.5 * res_prev:
                 renewals += 1
-                if renewals > 1:  # stalls with a fresh Jacobian too: the step was too long
-                    break
+                if max_renewals is not None and renewals > max_renewals:
+                    break  # stalls with a fresh Jacobian too: the step was too long
                 A, dz = None, None  # stalls: a new Jacobian here
                 continue
             res_prev = res
@@ -301,7 +301,11 @@ class _Tracer:
                 return pts, "max_evaluations"
             z_pred = a.st.z + ds * a.t
             try:
-                st, it = self.correct(z_pred, a.t, a.t @ z_pred, a.st.J, radius=ds)
+                # impatient (one renewal) while the step is long, patient when it is short:
+                # a step that fails is cheaper halved than iterated on, but a short step
+                # next to a corner needs the iterations (else the trace ends in underflow)
+                st, it = self.correct(z_pred, a.t, a.t @ z_pred, a.st.J, radius=2 * ds + 0.01,
+                                      max_renewals=1 if ds > 0.1 * self.ds0 else None)
                 t = _tangent(st.J, a.t)
                 if t @ a.t < self.cos_max:
                     raise ConvergenceError("angle")
