@@ -284,6 +284,24 @@ class _Tracer:
             factor = min(factor, 1.0)
         return min(max(ds * factor, self.ds_min), self.ds_max)
 
+    def _closes(self, p0, a, b, ds):
+        """The step a -> b passes the start p0 again: in the (log f, q) plane the step crosses
+        the line through p0 normal to p0's tangent within a step length of p0, and the orbit's
+        state at t = 0 there is p0's (to 2 ds + 1e-3 of its size). In the plane, not in all
+        unknowns: after ``adapt`` the shooting states of the same orbit are not the start's."""
+        k = slice(self.s.n, self.s.n + 2)
+        t0 = p0.t[k]
+        if np.linalg.norm(t0) < 1e-12:
+            return False
+        da, db = a.st.z[k] - p0.st.z[k], b.st.z[k] - p0.st.z[k]
+        if (da @ t0) * (db @ t0) > 0 or min(np.linalg.norm(da), np.linalg.norm(db)) > ds:
+            return False
+        near = a if np.linalg.norm(da) < np.linalg.norm(db) else b
+        size = max(float(np.max(np.abs(p0.state0))), 1e-300)
+        # the nearest point lies within a step of the start (a step moves the scaled
+        # unknowns by ds): its state within twice that
+        return float(np.max(np.abs(near.state0 - p0.state0))) <= (2 * ds + 1e-3) * size
+
     def trace(self, p0, on_step):
         """Points from p0 (excluded) on, and the reason the trace stopped. on_step(a, b):
         called for each accepted step (codimension-2 detection)."""
@@ -341,8 +359,9 @@ class _Tracer:
             on_step(a, b, len(pts))
             pts.append(b)
             # closed curve: back next to the start after going round
-            if len(pts) > 4 and np.linalg.norm(b.st.z - z_start) < 0.5 * ds \
-                    and (b.st.z - z_start) @ p0.t < 0 <= (a.st.z - z_start) @ p0.t + 1e-300:
+            if len(pts) > 4 and (self._closes(p0, a, b, ds) or (
+                    np.linalg.norm(b.st.z - z_start) < 0.5 * ds
+                    and (b.st.z - z_start) @ p0.t < 0 <= (a.st.z - z_start) @ p0.t + 1e-300)):
                 return pts, "closed"
             t_plane = b.t[s.n:s.n + 2].copy()
             new = s.adapt(b.st.z)
