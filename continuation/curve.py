@@ -16,6 +16,8 @@ import numpy as np
 
 import nlbeam
 
+from nlbeam.parameters import check_parameter, get_parameter, parameter_names, with_parameter
+
 from ._newton import ContinuationWarning, ConvergenceError
 from .extended import KINDS, CurveSystem
 from .pathfollow import test_functions
@@ -31,7 +33,10 @@ class Codim2:
     'fold-grazing' / 'flip-grazing' / 'neimark-sacker-grazing' (the curve meets a grazing
     curve: the number of impacts per period changes along it; on a grazing curve, a multiplier
     crosses +1 / -1 there). frequency (Hz), value (second parameter); error_frequency,
-    error_value: half the width of the final bracket along the curve (for a cusp also the
+    error_value: half the width of the final bracket along the curve (regula falsi on the
+    test function; bisection for a change of impacts) plus, for a fold-flip or a fold / flip
+    point on a grazing curve located with error=True, twice its move when it is located
+    again with both steps halved (the integration error); (for a cusp also the
     distance between where the curve turns in frequency and where it turns in the second
     parameter); index: the curve point before it."""
 
@@ -150,29 +155,42 @@ class _Tracer:
         self.max_evaluations = None
 
     # corrector: Newton on G(z) = 0 with one more equation c(z) = 0 (linear: row . z = rhs)
-    def correct(self, z, row, rhs, J=None):
+    def correct(self, z, row, rhs, J=None, jac=True, radius=None, max_renewals=None):
         """Newton on G(z) = 0 with the linear condition row . z = rhs; a quasi-Newton
         iteration from the Jacobian J given (the previous point's) with Broyden's rank-one
-        updates, the Jacobian renewed when an iterate does not halve the residual. Returns
-        (CurveState at the solution, with its Jacobian; iterations)."""
+        updates, the Jacobian renewed when an iterate does not halve the residual (given up
+        after ``max_renewals`` renewals: the predictor is too far for the step to pay; or when
+        an iterate lies farther than ``radius`` from the prediction z, scaled). Returns
+        (CurveState at the solution, with its Jacobian unless jac=False; iterations)."""
         s = self.s
         res_prev = np.inf
         A = None if J is None else np.vstack([J, row[None, :]])
         fresh = J is None
         F_prev = dz = None
+        z_first = z
+        renewals = 0
+        renewed = False  # a Jacobian was computed in this call
         for it in range(self.max_iter):
             st = s.evaluate(z, jac=A is None)
             F = np.r_[st.G, row @ z - rhs]
             if A is None:
                 A, fresh = np.vstack([st.J, row[None, :]]), True
+                renewed = True
             elif dz is not None:
                 A = A + np.outer(F - F_prev - A @ dz, dz) / (dz @ dz)  # Broyden
             res = float(np.max(np.abs(F)))
             if not np.isfinite(res):
                 break
             if res <= self.tol:
-                return (st if st.J is not None else s.evaluate(z)), it
+                if st.J is None and jac and renewed:
+                    # a Jacobian computed in this call, updated since: good enough for the
+                    # tangent and the next corrector (saves D evaluations per point)
+                    st.J = A[:-1].copy()
+                return (st if st.J is not None or not jac else s.evaluate(z)), it
             if not fresh and res > 0.5 * res_prev:
+                renewals += 1
+                if max_renewals is not None and renewals > max_renewals:
+                    break  # stalls with a fresh Jacobian too: the step was too long
                 A, dz = None, None  # stalls: a new Jacobian here
                 continue
             res_prev = res
@@ -189,6 +207,8 @@ class _Tracer:
             dz = c * step
             z = z + dz
             F_prev = F
+            if radius is not None and np.linalg.norm(z - z_first) > radius:
+                break  # wandering off the prediction (towards a neighbouring curve)
         raise ConvergenceError(f"{s.kind} curve: corrector did not converge near "
                                f"{s.point(z)[0]:.9g} Hz, {s.parameter} = {s.point(z)[1]:.6g}")
 
@@ -204,9 +224,16 @@ class _Tracer:
         perpendicular to it, the frequency)."""
         s = self.s
         z0 = s.z0
-        row = np.zeros(s.D)
-        row[s.n + 1] = 1.0
-        st, _ = self.correct(z0, row, z0[s.n + 1])
+        try:  # at the start's second-parameter value
+            row = np.zeros(s.D)
+            row[s.n + 1] = 1.0
+            st, _ = self.correct(z0, row, z0[s.n + 1])
+        except ConvergenceError:
+            # a curve along the frequency axis (the locus does not depend on the frequency,
+            # e.g. a linear structure's flutter): at the start's frequency instead
+            row = np.zeros(s.D)
+            row[s.n] = 1.0
+            st, _ = self.correct(z0, row, z0[s.n])
         t = _null(st.J)
         k = s.n + 1 if abs(t[s.n + 1]) > 1e-8 else s.n
         if np.sign(t[k]) != direction:
@@ -242,6 +269,39 @@ class _Tracer:
             return None
         return min(hits)[1:]
 
+    def _next_ds(self, ds, it, cos_turn):
+        """The next step from the last one's corrector iterations and the angle the tangent
+        turned: the step is scaled so the tangent turns by about a third of max_angle
+        (at most doubled, at least halved); shrunk when the quasi-Newton corrector needed 9
+        iterations or more, not grown when it needed more than 7 (it converges linearly:
+        5-7 iterations are its usual count, which a count-only rule read as too slow)."""
+        turn = math.acos(min(1.0, max(-1.0, cos_turn)))
+        target = math.acos(self.cos_max) / 3.0
+        factor = min(2.0, max(0.5, target / max(turn, 1e-3)))
+        if it >= 9:
+            factor = min(factor, 0.6)
+        elif it > 7:
+            factor = min(factor, 1.0)
+        return min(max(ds * factor, self.ds_min), self.ds_max)
+
+    def _closes(self, p0, a, b, ds):
+        """The step a -> b passes the start p0 again: in the (log f, q) plane the step crosses
+        the line through p0 normal to p0's tangent within a step length of p0, and the orbit's
+        state at t = 0 there is p0's (to 2 ds + 1e-3 of its size). In the plane, not in all
+        unknowns: after ``adapt`` the shooting states of the same orbit are not the start's."""
+        k = slice(self.s.n, self.s.n + 2)
+        t0 = p0.t[k]
+        if np.linalg.norm(t0) < 1e-12:
+            return False
+        da, db = a.st.z[k] - p0.st.z[k], b.st.z[k] - p0.st.z[k]
+        if (da @ t0) * (db @ t0) > 0 or min(np.linalg.norm(da), np.linalg.norm(db)) > ds:
+            return False
+        near = a if np.linalg.norm(da) < np.linalg.norm(db) else b
+        size = max(float(np.max(np.abs(p0.state0))), 1e-300)
+        # the nearest point lies within a step of the start (a step moves the scaled
+        # unknowns by ds): its state within twice that
+        return float(np.max(np.abs(near.state0 - p0.state0))) <= (2 * ds + 1e-3) * size
+
     def trace(self, p0, on_step):
         """Points from p0 (excluded) on, and the reason the trace stopped. on_step(a, b):
         called for each accepted step (codimension-2 detection)."""
@@ -249,6 +309,7 @@ class _Tracer:
         pts = []
         a = p0
         ds = self.ds0
+        ds_fail = None  # the last step that failed (growth stays below it for a while)
         n0 = s.n_evaluations
         z_start = p0.st.z
         while True:
@@ -258,11 +319,16 @@ class _Tracer:
                 return pts, "max_evaluations"
             z_pred = a.st.z + ds * a.t
             try:
-                st, it = self.correct(z_pred, a.t, a.t @ z_pred, a.st.J)
+                # impatient (one renewal) while the step is long, patient when it is short:
+                # a step that fails is cheaper halved than iterated on, but a short step
+                # next to a corner needs the iterations (else the trace ends in underflow)
+                st, it = self.correct(z_pred, a.t, a.t @ z_pred, a.st.J, radius=2 * ds + 0.01,
+                                      max_renewals=1 if ds > 0.1 * self.ds0 else None)
                 t = _tangent(st.J, a.t)
                 if t @ a.t < self.cos_max:
                     raise ConvergenceError("angle")
             except ConvergenceError:
+                ds_fail = ds
                 ds *= 0.5
                 if ds < self.ds_min:
                     return pts, "step underflow"
@@ -293,8 +359,9 @@ class _Tracer:
             on_step(a, b, len(pts))
             pts.append(b)
             # closed curve: back next to the start after going round
-            if len(pts) > 4 and np.linalg.norm(b.st.z - z_start) < 0.5 * ds \
-                    and (b.st.z - z_start) @ p0.t < 0 <= (a.st.z - z_start) @ p0.t + 1e-300:
+            if len(pts) > 4 and (self._closes(p0, a, b, ds) or (
+                    np.linalg.norm(b.st.z - z_start) < 0.5 * ds
+                    and (b.st.z - z_start) @ p0.t < 0 <= (a.st.z - z_start) @ p0.t + 1e-300)):
                 return pts, "closed"
             t_plane = b.t[s.n:s.n + 2].copy()
             new = s.adapt(b.st.z)
@@ -306,12 +373,17 @@ class _Tracer:
                     t3 = -t3
                 b = self.make_point(st3, t3, b.exact)
                 pts[-1] = b
-            else:
+            elif it > 6:
+                # new borders only when the corrector struggled: the point's Jacobian, which
+                # starts the next corrector, holds the test function's row for the borders
+                # in use, and a renewal makes that row stale (measured on the paper chart's
+                # fold curves near 10 Hz: renewing at every point made the first quasi-Newton
+                # step raise the residual, a fresh Jacobian at every point, and failed steps)
                 s.renew_borders(b.st.z)
-            if it <= 4:  # quasi-Newton iterations: a few more than Newton's
-                ds = min(ds * 1.5, self.ds_max)
-            elif it >= 8:
-                ds = max(ds * 0.6, self.ds_min)
+            ds = self._next_ds(ds, it, t @ a.t)
+            if ds_fail is not None:  # not back to a step that failed: grow below it
+                ds = min(ds, 0.7 * ds_fail)
+                ds_fail = ds_fail * 1.2 if ds_fail * 1.2 < self.ds_max else None
             a = b
 
 
@@ -319,35 +391,54 @@ def _side(v):
     return bool(v) if isinstance(v, (bool, np.bool_)) else v > 0
 
 
-def _locate(tr, a, b, fun, iters=40, rel=1e-9):
+def _locate(tr, a, b, fun, iters=40, rel=1e-9, tangent=False):
     """The point between curve points a and b where fun(point) changes sign (fun: of a
-    CurveState and its unit tangent), by bisection on the arclength along the chord. Returns
-    (point, bracket half-width (frequency Hz, value)). fun may return a float or a bool."""
+    CurveState and its unit tangent), along the chord: a continuous fun by regula falsi
+    with the Illinois modification (superlinear; the bracket shrinks from both sides), a
+    bool by bisection; each trial point corrected onto the curve on the plane normal to the
+    chord (its Jacobian only when ``tangent``: fun reads the tangent). Returns (point,
+    bracket half-width (frequency Hz, value)): the final bracket, which holds the zero of fun
+    on the corrected curve (its integration error is not in it)."""
     za, zb = a.st.z, b.st.z
     d = zb - za
     L = float(np.linalg.norm(d))
     if L == 0:
         return a, (0.0, 0.0)
     e = d / L
-    fa = fun(a.st, a.t)
+    fa, fb = fun(a.st, a.t), fun(b.st, b.t)
+    continuous = not isinstance(fa, (bool, np.bool_))
     lo, hi = 0.0, L
+    flo, fhi = (float(fa), float(fb)) if continuous else (None, None)
     best = a
     plo, phi = a, b
+    kept = 0  # Illinois: which end was kept last (-1 lo, +1 hi), twice in a row halves it
     for _ in range(iters):
         mid = 0.5 * (lo + hi)
+        if continuous and flo != fhi and math.isfinite(flo) and math.isfinite(fhi):
+            mid = (lo * fhi - hi * flo) / (fhi - flo)
+            w = 1e-3 * (hi - lo)  # strictly inside
+            mid = min(max(mid, lo + w), hi - w)
         try:
-            st, _ = tr.correct(za + mid * e, e, e @ za + mid, a.st.J)
+            st, _ = tr.correct(za + mid * e, e, e @ za + mid, a.st.J, jac=tangent)
         except ConvergenceError:
             break
-        t = _tangent(st.J, a.t)
+        t = _tangent(st.J, a.t) if st.J is not None else e
         pm = tr.make_point(st, t)
         fm = fun(st, t)
+        best = pm
         if _side(fm) == _side(fa):
             lo, plo = mid, pm
+            if continuous:
+                flo = float(fm)
+                fhi = 0.5 * fhi if kept == -1 else fhi
+            kept = -1
         else:
             hi, phi = mid, pm
-        best = pm
-        if hi - lo <= rel * L + 1e-12:
+            if continuous:
+                fhi = float(fm)
+                flo = 0.5 * flo if kept == 1 else flo
+            kept = 1
+        if hi - lo <= rel * L + 1e-12 or (continuous and fm == 0):
             break
     ef = 0.5 * abs(phi.frequency - plo.frequency)
     ev = 0.5 * abs(phi.value - plo.value)
@@ -366,7 +457,9 @@ def _other_tests(kind, mu):
     return out
 
 
-def _detector(tr, special):
+def _detector(tr, special, tests):
+    """on_step for the tracer: appends the Codim2 points met to ``special``, and (Codim2,
+    located point, test name) of those located on a continuous test function to ``tests``."""
     s = tr.s
     kind = s.kind
 
@@ -376,8 +469,8 @@ def _detector(tr, special):
         if kind == "fold":
             kf, kp = s.n, s.n + 1
             if a.t[kf] * b.t[kf] < 0 and a.t[kp] * b.t[kp] < 0:
-                pt, (ef, ev) = _locate(tr, a, b, lambda st, t: t[kp])
-                pt2, _ = _locate(tr, a, b, lambda st, t: t[kf])
+                pt, (ef, ev) = _locate(tr, a, b, lambda st, t: t[kp], tangent=True)
+                pt2, _ = _locate(tr, a, b, lambda st, t: t[kf], tangent=True)
                 ef = max(ef, abs(pt2.frequency - pt.frequency))
                 ev = max(ev, abs(pt2.value - pt.value))
                 special.append(Codim2("cusp", pt.frequency, pt.value, ef, ev, index))
@@ -394,7 +487,9 @@ def _detector(tr, special):
                         what = "fold-flip"
                     else:
                         continue
-                    special.append(Codim2(what, pt.frequency, pt.value, ef, ev, index))
+                    c2 = Codim2(what, pt.frequency, pt.value, ef, ev, index)
+                    special.append(c2)
+                    tests.append((c2, pt, name))
         # the number of impacts per period changes: the curve meets a grazing curve
         if kind != "grazing" and sa.n_impacts != sb.n_impacts:
             pt, (ef, ev) = _locate(tr, a, b, lambda st, t: st.n_impacts == sa.n_impacts,
@@ -410,11 +505,9 @@ def _detector(tr, special):
 def _point_error(model, sysm, amplitude, pt, integrator, segments, tol):
     """Twice the change of the point's frequency (Hz) when it is located again at its
     second-parameter value with both steps halved (NaN, with a warning, if that fails)."""
-    import dataclasses
-
     A = pt.value if sysm.parameter == "amplitude" else amplitude
-    m = model if sysm.parameter == "amplitude" else dataclasses.replace(
-        model, **{sysm.parameter: pt.value})
+    m = model if sysm.parameter == "amplitude" else with_parameter(model, sysm.parameter,
+                                                                     pt.value)
     try:
         s2 = CurveSystem(m, sysm.kind, sysm.order, A, pt.frequency, pt.state0, sysm.parameter,
                          integrator.refined(1), segments=segments,
@@ -430,6 +523,39 @@ def _point_error(model, sysm, amplitude, pt, integrator, segments, tol):
         return float("nan")
 
 
+def _codim2_error(model, sysm, amplitude, c2, pt, name, integrator, segments, tol):
+    """Add the integration error to a codimension-2 point's bracket errors (in place): the
+    curve is solved with both steps halved at the point's value and at a value 1e-4 (relative)
+    beside it, the test function's zero placed by the secant through the two, and twice the
+    move of (frequency, value) added to (error_frequency, error_value). A failure leaves the
+    bracket errors and says so in the point's note."""
+    v0 = pt.value
+    out = []
+    try:
+        for v in (v0, v0 * (1 + 1e-4) if v0 != 0 else 1e-8):
+            A = v if sysm.parameter == "amplitude" else amplitude
+            m = model if sysm.parameter == "amplitude" else with_parameter(
+                model, sysm.parameter, v)
+            s2 = CurveSystem(m, sysm.kind, sysm.order, A, pt.frequency, pt.state0,
+                             sysm.parameter, integrator.refined(1), segments=segments,
+                             element=getattr(sysm, "element", None),
+                             phase=None if math.isnan(pt.phase) else pt.phase)
+            tr = _Tracer(s2, (0.5 * pt.frequency, 2 * pt.frequency), (-np.inf, np.inf), (),
+                         0.05, 1e-6, 0.3, 0.3, 1, tol, 10)
+            p = tr.start(1)
+            out.append((p.frequency, p.value, _other_tests(sysm.kind, p.st.multipliers)[name]))
+    except (ConvergenceError, nlbeam.IntegrationError) as exc:
+        c2.note = (c2.note + "; " if c2.note else "") + f"no integration error estimate ({exc})"
+        return
+    (f0, w0, g0), (f1, w1, g1) = out
+    if g1 == g0:
+        c2.note = (c2.note + "; " if c2.note else "") + "no integration error estimate"
+        return
+    r = -g0 / (g1 - g0)
+    c2.error_frequency += 2.0 * abs(f0 + r * (f1 - f0) - c2.frequency)
+    c2.error_value += 2.0 * abs(w0 + r * (w1 - w0) - c2.value)
+
+
 # --- front door -----------------------------------------------------------------------------------
 def _check_range(name, rng, unit, lo_open=0.0):
     try:
@@ -442,17 +568,12 @@ def _check_range(name, rng, unit, lo_open=0.0):
 
 
 def _check_parameter(model, parameter):
-    if parameter == "amplitude":
-        return
-    import dataclasses
-
-    names = [f.name for f in dataclasses.fields(model) if f.init
-             and isinstance(getattr(model, f.name), (int, float))
-             and not isinstance(getattr(model, f.name), bool)] if \
-        dataclasses.is_dataclass(model) else []
-    if parameter not in names:
-        raise ValueError(f"parameter: must be 'amplitude' or a numeric parameter of the model "
-                         f"({', '.join(names) or 'none'}), got {parameter!r}")
+    """'amplitude' or a name of nlbeam.parameters (the error lists the names that exist)."""
+    if parameter == "frequency":
+        raise ValueError("parameter: the frequency is the curve's first parameter; give the "
+                         "second one: 'amplitude' or " + ", ".join(
+                             repr(n) for n in parameter_names(model)))
+    check_parameter(model, parameter, extra=("amplitude",))
 
 
 def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter="amplitude",
@@ -466,7 +587,8 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     'fold', 'period-doubling', 'neimark-sacker' or 'grazing', with its state0 and order), or a
     dict with keys kind, frequency (Hz), order, state0 (and optionally disc0). amplitude: the
     diagram's excitation amplitude (m or N); parameter: the second parameter, 'amplitude'
-    (default) or a numeric field of the model ('e', 'K_hertz', 'b', ...), continued together
+    (default) or any name of nlbeam.parameters (a model field 'e', 'K_hertz', 'b', 'm', 'k';
+    an element parameter of a general System 'elements[0].gap', ...), continued together
     with the frequency along the curve; p_range: (lo, hi) of that parameter, which must hold
     the start's value; f_range: (lo, hi) Hz (default: 0.2-5 times the start frequency).
     at: second-parameter values at which exact curve points are placed (BifurcationCurve.at).
@@ -476,7 +598,7 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     max_iter (corrector), max_evaluations (shooting evaluations per direction, None: no
     limit; a trace that reaches it ends 'max_evaluations'). element, phase: for a grazing
     curve, the stop (element index) and excitation phase (periods) of the grazing contact
-    (default: the local maximum of the penetration closest to zero on the start orbit).
+    (default: the extremum of the penetration closest to zero on the start orbit).
     Integrator options as for periodic_solution (the diagram's integrator, for the curve to
     pass through its points). error: estimate the integration error of the frequency at the
     start and the ``at`` points (BifurcationCurve.error). Codimension-2 points met (Codim2:
@@ -507,7 +629,7 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     amplitude = float(amplitude)
     _check_parameter(model, parameter)
     p_lo, p_hi = _check_range("p_range", p_range, "(units of the parameter)")
-    p0 = amplitude if parameter == "amplitude" else float(getattr(model, parameter))
+    p0 = amplitude if parameter == "amplitude" else get_parameter(model, parameter)
     if not p_lo <= p0 <= p_hi:
         raise ValueError(f"p_range: must hold the start's {parameter} = {p0:.6g}, got {p_range!r}")
     if parameter == "amplitude" and p_lo <= 0:
@@ -539,14 +661,14 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
             raise ValueError(f"max_evaluations: must be an integer >= 1 or None, got "
                              f"{max_evaluations!r}")
         tr.max_evaluations = int(max_evaluations)
-    special = []
+    special, tests = [], []
     halves, ends = [], []
     snapshot = sysm.snapshot()
     for d in directions:
         # each direction from the start (the problem may have been rephased by the other)
         sysm.restore(snapshot)
         start = tr.start(d)
-        pts, why = tr.trace(start, _detector(tr, special))
+        pts, why = tr.trace(start, _detector(tr, special, tests))
         halves.append((start, pts))
         ends.append(why)
         if why == "closed":
@@ -576,6 +698,9 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
         for i, p in enumerate(pts):
             if p.exact and (p is pts_start or any(abs(p.value - a) <= 1e-9 * abs(a) for a in at)):
                 err[i] = _point_error(model, sysm, amplitude, p, integrator, segments, tol)
+    if error:
+        for c2, pt, name in tests:
+            _codim2_error(model, sysm, amplitude, c2, pt, name, integrator, segments, tol)
     special.sort(key=lambda c: (c.value, c.frequency))
     for c in special:  # the curve point nearest to it
         c.index = int(np.argmin(np.hypot(np.log(f / c.frequency), (v - c.value) / (

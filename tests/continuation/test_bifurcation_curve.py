@@ -195,7 +195,7 @@ def test_curve_in_frequency_and_restitution_agrees_with_diagrams(paper_pd_curve)
 
 
 @pytest.mark.parametrize("kw, match", [
-    ({"parameter": "gap_mm"}, "parameter: must be 'amplitude' or a numeric parameter"),
+    ({"parameter": "gap_mm"}, "parameter: 'gap_mm' is not a parameter.*amplitude, m, b, k, k3"),
     ({"p_range": (2e-4, 5e-4)}, "p_range: must hold the start's amplitude"),
     ({"p_range": (0.0, 1.0)}, "p_range: amplitudes must be > 0"),
     ({"f_range": (60.0, 70.0)}, "f_range: must hold the start frequency"),
@@ -224,3 +224,57 @@ def test_a_bifurcation_at_a_grazing_point_is_refused_with_the_way_out():
     with pytest.raises(ValueError, match="bifurcation: needs frequency, order and state0"):
         C.bifurcation_curve(nlbeam.BeamImpact(), {"kind": "fold", "frequency": 58.0,
                                                   "order": 1}, (5e-5, 2e-4), amplitude=1e-4)
+
+
+# --- a Neimark-Sacker curve with a closed-form locus ----------------------------------------
+_K1, _K2, _CD, _A = 1.0, 1.0, 0.1, 0.3
+
+
+@nlbeam.systems._model_protocol
+@dataclasses.dataclass(frozen=True)
+class _Flutter:
+    """x'' + c x' + K x = [F cos(2 pi f t), 0], K = [[k1 + ks, a], [-a, k2]] (a circulatory
+    coupling): linear, so the orbit's multipliers are exp(lambda T) of the eigenvalues lambda
+    of the structure, and its Neimark-Sacker locus in (f, ks) is the flutter boundary
+    Re lambda = 0, independent of f: with s = lambda^2 + c lambda = -S +- i D
+    (S = (k1 + ks + k2) / 2, D^2 = a^2 - (k1 + ks - k2)^2 / 4), lambda = i w needs D = c w and
+    w^2 = S, i.e. d^2 + 2 c^2 d + 4 (c^2 k2 - a^2) = 0 for d = k1 + ks - k2."""
+
+    ks: float = 0.6
+    system: object = dataclasses.field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "system", nlbeam.System(
+            np.eye(2), _CD * np.eye(2), [[_K1 + self.ks, _A], [-_A, _K2]], (), "force",
+            y_load=[1.0, 0.0], yd_load=[0.0, 0.0], output_dof=0, name="Flutter"))
+
+    def parameters(self):
+        return {"model": "Flutter", "ks": self.ks}
+
+
+def test_neimark_sacker_curve_is_the_closed_form_flutter_boundary():
+    """The NS curve in (f, ks), started from an orbit off the curve (ks = 0.6, the start
+    solved at its frequency since the locus runs along the frequency axis), lies on the
+    Routh-Hurwitz flutter boundary ks = 0.5557738 over the whole frequency range, where the
+    orbit has a complex pair of multipliers on the unit circle. Measured: |ks - ks_crit|
+    1.7e-8 (the integration error of the monodromy); ||mu| - 1| asserted to 1e-6."""
+    d = -_CD ** 2 + np.sqrt(_CD ** 4 - 4 * _CD ** 2 * _K2 + 4 * _A ** 2)
+    ks_crit = d + _K2 - _K1
+    m = _Flutter(0.6)
+    sol = C.periodic_solution(m, 0.1, 0.1, error=False)
+    assert np.all(np.abs(sol.multipliers) < 1)  # stable at ks = 0.6: off the curve
+    bf = {"kind": "neimark-sacker", "frequency": 0.1, "order": 1, "state0": sol.state0}
+    cur = C.bifurcation_curve(m, bf, (0.3, 0.8), amplitude=0.1, parameter="ks",
+                              f_range=(0.07, 0.14), error=False)
+    assert cur.kind == "neimark-sacker" and cur.ends == ("left the frequency range",) * 2
+    assert cur.frequency.min() == pytest.approx(0.07) and cur.frequency.max() == \
+        pytest.approx(0.14)
+    assert np.max(np.abs(cur.values - ks_crit)) <= 1e-6 * ks_crit
+    mu = cur.multipliers[:, :2]  # largest modulus first: the flutter pair
+    assert np.all(np.abs(mu.imag) > 1e-3)  # a complex pair, not a neutral saddle
+    assert np.max(np.abs(np.abs(mu) - 1.0)) <= 1e-6
+    # off the curve the pair is off the unit circle, on the side Routh-Hurwitz says
+    lam = np.linalg.eigvals(np.block([[np.zeros((2, 2)), np.eye(2)],
+                                      [-np.array([[_K1 + 0.5, _A], [-_A, _K2]]),
+                                       -_CD * np.eye(2)]]))
+    assert lam.real.max() > 0  # ks = 0.5 < ks_crit: flutter
