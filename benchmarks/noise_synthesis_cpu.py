@@ -1,12 +1,19 @@
 """CPU time of the noise synthesis and of stochastic.simulate (paper beam, 0-200 Hz, rms 1e-4);
 run with PYTHONPATH set to each checkout, alternating, to compare two versions side by side.
-Usage: python benchmarks/noise_synthesis_cpu.py [duration_s]"""
+With --breakdown, also where simulate's CPU goes (cProfile with time.process_time, cumulative
+per part): synthesis (the chunk tables), integration (nlbeam.integrate), estimators (feeding
+Welch / histogram / moments per chunk), results (standard errors, intervals at the end).
+Usage: python benchmarks/noise_synthesis_cpu.py [duration_s] [--breakdown]"""
+import cProfile
+import pstats
 import sys
 import time
 
 import nlbeam
 import stochastic as st
-dur = float(sys.argv[1]) if len(sys.argv) > 1 else 20.0
+
+args = [a for a in sys.argv[1:] if not a.startswith("--")]
+dur = float(args[0]) if args else 20.0
 noise = st.BandLimitedNoise((0.0, 200.0), rms=1e-4, seed=1)
 noise.block(0)
 t = time.process_time(); n = 0
@@ -21,6 +28,22 @@ t = time.process_time()
 res = st.simulate(model, noise, dur, transient=1.0, channels=("delta", "x", "y"))
 cpu = time.process_time() - t
 mo = res.moments("delta")
-print(f"{nlbeam.__file__.split('/nlbeam/')[0]}: synthesis {dur/syn:.0f} s/CPU s; simulate "
-      f"{(dur+1)/cpu:.1f} sim s/CPU s; impacts {res.n_impacts}; skew {mo['skewness']:.4f} "
-      f"kurt {mo['kurtosis']:.4f}", flush=True)
+print(f"{nlbeam.__file__.split('/nlbeam/')[0]}: synthesis {dur/syn:.0f} s/CPU s (h {noise.h:.3g} "
+      f"s); simulate {(dur+1)/cpu:.1f} sim s/CPU s; impacts {res.n_impacts}; skew "
+      f"{mo['skewness']:.4f} kurt {mo['kurtosis']:.4f}", flush=True)
+if "--breakdown" in sys.argv:
+    noise = st.BandLimitedNoise((0.0, 200.0), rms=1e-4, seed=1)
+    prof = cProfile.Profile(time.process_time)
+    prof.enable()
+    st.simulate(model, noise, dur, transient=1.0, channels=("delta", "x", "y"))
+    prof.disable()
+    stats = pstats.Stats(prof).stats
+    total = max(v[3] for v in stats.values())
+    parts = {"synthesis": "_chunk_excitation", "integration": "integrate",
+             "estimators": "feed", "results": "store_results"}
+    cum = {k: sum(v[3] for (f, _, name), v in stats.items()
+                  if name == fn and ("stochastic" in f or "nlbeam" in f))
+           for k, fn in parts.items()}
+    print("  breakdown (ms CPU of %.1f): " % (1e3 * total) + ", ".join(
+        f"{k} {1e3 * v:.1f}" for k, v in cum.items())
+        + f", other {1e3 * (total - sum(cum.values())):.1f}", flush=True)

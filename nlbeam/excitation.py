@@ -17,6 +17,7 @@ from ._validate import finite, nonnegative, positive, real_array
 HARMONIC = 0
 SAMPLED = 1
 COSINE_SUM = 2
+SAMPLED_QUINTIC = 3
 
 _EMPTY_TAB = np.zeros((1, 3))
 
@@ -92,7 +93,10 @@ class Sampled(Excitation):
 
     ``y`` is interpolated by the cubic Hermite polynomial through (y, y') and ``y'`` by the
     one through (y', y''): both errors are O(h^4). ``ydd`` may be omitted (then ``y'`` is
-    interpolated linearly, O(h^2), which is only adequate for coarse work).
+    interpolated linearly, O(h^2), which is only adequate for coarse work). With ``yddd``
+    (y''', m/s^3; ``ydd`` then required) both are quintic Hermite polynomials, through
+    (y, y', y'') and through (y', y'', y'''): errors O(h^6), at most h^6/46080 max|y^(6)|
+    and h^6/46080 max|y^(7)| (a band-limited signal allows a ~9x coarser grid than cubic).
     Evaluating outside ``[t_start, t_start + (n-1) h]`` is an error.
     """
 
@@ -102,7 +106,27 @@ class Sampled(Excitation):
     yd: np.ndarray
     ydd: np.ndarray | None = None
     max_freq: float = 0.0
+    yddd: np.ndarray | None = None
     tab: np.ndarray = field(init=False, repr=False)
+
+    @classmethod
+    def from_table(cls, t_start, h, tab, max_freq=0.0):
+        """A table from its kernel array ``tab``, (n, 3) [y, y', y''] or (n, 4) [y, y', y'',
+        y'''], used as it is (no copy when C-contiguous float64); checked finite."""
+        finite("t_start", t_start)
+        positive("h", h, unit="s")
+        nonnegative("max_freq", max_freq, unit="Hz")
+        tab = np.ascontiguousarray(tab, dtype=float)
+        if tab.ndim != 2 or tab.shape[1] not in (3, 4) or tab.shape[0] < 2:
+            raise ValueError(f"tab: must have shape (n >= 2, 3 or 4), got {tab.shape}")
+        if not np.isfinite(tab).all():
+            raise ValueError("tab: must be finite")
+        obj = object.__new__(cls)
+        for name, v in (("t_start", float(t_start)), ("h", float(h)), ("y", tab[:, 0]),
+                        ("yd", tab[:, 1]), ("ydd", tab[:, 2]), ("max_freq", float(max_freq)),
+                        ("yddd", tab[:, 3] if tab.shape[1] == 4 else None), ("tab", tab)):
+            object.__setattr__(obj, name, v)
+        return obj
 
     def __post_init__(self):
         finite("t_start", self.t_start)
@@ -112,7 +136,9 @@ class Sampled(Excitation):
         yd = np.ascontiguousarray(real_array("yd", self.yd, finite_values=False))
         if y.ndim != 1 or y.shape != yd.shape or y.size < 2:
             raise ValueError("y, yd: must be 1-D arrays of equal length >= 2")
-        tab = np.empty((y.size, 3))
+        if self.yddd is not None and self.ydd is None:
+            raise ValueError("yddd: a quintic table needs ydd as well (y, y', y'', y''')")
+        tab = np.empty((y.size, 3 if self.yddd is None else 4))
         tab[:, 0] = y
         tab[:, 1] = yd
         if self.ydd is None:
@@ -122,20 +148,28 @@ class Sampled(Excitation):
             if ydd.shape != y.shape:
                 raise ValueError("ydd: must have the shape of y")
             tab[:, 2] = ydd
+        if self.yddd is not None:
+            yddd = real_array("yddd", self.yddd, finite_values=False)
+            if yddd.shape != y.shape:
+                raise ValueError("yddd: must have the shape of y")
+            tab[:, 3] = yddd
+            if not np.all(np.isfinite(tab[:, 2:])):
+                raise ValueError("ydd, yddd: must be finite")
         if not np.all(np.isfinite(tab[:, :2])):
             raise ValueError("y, yd: must be finite")
         object.__setattr__(self, "tab", tab)
 
     def kernel_args(self):
         p = np.array([float(self.t_start), float(self.h), float(self.tab.shape[0])])
-        return SAMPLED, p, self.tab
+        return (SAMPLED if self.tab.shape[1] == 3 else SAMPLED_QUINTIC), p, self.tab
 
     def time_span(self):
         return (self.t_start, self.t_start + (self.tab.shape[0] - 1) * self.h)
 
     def describe(self):
         return {"kind": "Sampled", "t_start": float(self.t_start), "h": float(self.h),
-                "n": int(self.tab.shape[0])}
+                "n": int(self.tab.shape[0]),
+                "interpolation": "cubic Hermite" if self.tab.shape[1] == 3 else "quintic Hermite"}
 
     def max_frequency(self):
         return float(self.max_freq) if self.max_freq > 0 else 0.25 / float(self.h)

@@ -7,9 +7,11 @@ the HDF5 files (`StochasticResult.save`, `load`) live on the application floor, 
 from . import errors  # standard errors of correlated records
 from .estimators import (StreamingHistogram, StreamingMoments, WelchPSD, correlation_from_psd,
                          welch_dof)
-from .noise import BandLimitedNoise, Realization, Recorded, SpectralNoise, hermite_step
+from .noise import (BandLimitedNoise, Realization, Recorded, SpectralNoise, hermite_step,
+                    quintic_step)
 
 __all__ = ["BandLimitedNoise", "SpectralNoise", "Realization", "Recorded", "hermite_step",
+           "quintic_step",
            "WelchPSD", "StreamingHistogram", "StreamingMoments", "correlation_from_psd",
            "welch_dof", "errors"]
 from .simulate import EnsembleResult, StochasticResult, ensemble, load, simulate  # noqa: E402

@@ -230,12 +230,12 @@ def histogram_count_batches(x, edges, uniform, bc, row, fill, size, counts, outs
 @njit(cache=True)
 def taylor_rows(D, T, scale, out):
     """out[q, c R + r] = scale[q] sum_n D[c, q + n] T[n, r], n = 0 .. P (T: (P + 1, R)),
-    q = 0, 1, 2: the fine values of z, z', z'' from their Taylor series about each coarse
-    node c (noise.lines_on_grid). One pass, no temporaries; the terms summed in the order of
-    n. Returns OK."""
+    q = 0 .. scale.size - 1: the fine values of z, z', z'', ... from their Taylor series about
+    each coarse node c (noise.lines_on_grid). One pass, no temporaries; the terms summed in
+    the order of n. Returns OK."""
     nc = D.shape[0]
     P1, R = T.shape
-    for q in range(3):
+    for q in range(scale.size):
         sq = scale[q]
         for c in range(nc):
             base = c * R

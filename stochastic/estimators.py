@@ -159,8 +159,10 @@ class WelchPSD:
         if not 0 < level < 1:
             raise ValueError(f"level: must lie in (0, 1), got {level!r}")
         p, nu = self.psd, self.dof
-        lo = p * nu / chi2.ppf(0.5 + level / 2, nu)
-        hi = p * nu / chi2.ppf(0.5 - level / 2, nu)
+        # the bins share two values of nu: the quantiles once per value (identical numbers)
+        nu_u, inv = np.unique(nu, return_inverse=True)
+        lo = p * nu / chi2.ppf(0.5 + level / 2, nu_u)[inv]
+        hi = p * nu / chi2.ppf(0.5 - level / 2, nu_u)[inv]
         return lo, hi
 
     def result(self) -> dict:

@@ -22,8 +22,9 @@ envelope period ``1/df`` exceeds ``B + L``).
 Synthesis is two steps, kept apart so that a faster evaluation can replace the second
 without touching the statistics: (1) :meth:`components` draws the line spectrum of a block
 (offset, phases, amplitudes, scaling: every statistical property lives here);
-(2) :func:`lines_on_grid` evaluates that line sum and its first two derivatives on the grid
-``tau_j = j h`` (one complex FFT, ``z = Re[exp(2 pi i (f_lo + u df) tau) * N ifft(c)]``).
+(2) :func:`lines_on_grid` evaluates that line sum and its first three derivatives on the
+grid ``tau_j = j h`` (complex FFTs on a coarser grid, ``z = Re[exp(2 pi i (f_lo + u df) tau)
+* N ifft(c)]``, refined by Taylor series).
 
 Line variances and the rms
 --------------------------
@@ -52,27 +53,34 @@ and offsets are the same in both modes for the same seed.
 
 Consecutive realizations are joined over the first ``L = fade_duration`` seconds of each
 block by the power-complementary pair ``w_in = sin(pi/2 g(s))``, ``w_out = cos(pi/2 g(s))``,
-``s = (t - i B)/L``, ``g(s) = s^3 (10 - 15 s + 6 s^2)``: ``w_in^2 + w_out^2 = 1`` keeps the
-variance that of the blocks (``rms^2`` exactly when requested), and ``g' = g'' = 0`` at
-both ends make ``y, y', y''`` continuous across joins; ``y' = w' z + w z'`` and
-``y'' = w'' z + 2 w' z' + w z''`` are exact (product rule). Across a join the covariance
+``s = (t - i B)/L``, ``g(s) = s^4 (35 - 84 s + 70 s^2 - 20 s^3)``: ``w_in^2 + w_out^2 = 1``
+keeps the variance that of the blocks (``rms^2`` exactly when requested), and ``g' = g'' =
+g''' = 0`` at both ends make ``y`` and its first three derivatives (the quintic table's
+columns) continuous across joins; ``y' = w' z + w z'`` and
+``y'' = w'' z + 2 w' z' + w z''`` (and ``y''' = w''' z + 3 w'' z' + 3 w' z'' + w z'''``) are
+exact (product rule). Across a join the covariance
 at lag tau is ``R(tau) cos(theta(t) - theta(t + tau))`` instead of ``R(tau)``; averaged
 over a block this smooths the PSD by a kernel of width ~ 1/B Hz (band edges only; a flat
 band interior is unchanged).
 
 Grid step and interpolation accuracy
 ------------------------------------
-``nlbeam.Sampled`` interpolates y by the cubic Hermite polynomial through (y, y') and y'
-by the one through (y', y''); the error is at most ``h^4/384 max|y''''|``. For a signal
-band-limited to ``f_max``, Bernstein's inequality gives ``max|y''''| <= (2 pi f_max)^4
-max|y|``, hence
+A block is a quintic ``nlbeam.Sampled`` table (columns y, y', y'', y'''): y is interpolated
+by the quintic Hermite polynomial through (y, y', y'') at both ends of a cell and y' by the
+one through (y', y'', y'''); the error in a cell [a, b] is ``y^(6)(xi)/6! (t-a)^3 (t-b)^3``,
+at most ``h^6/46080 max|y^(6)|``. For a signal band-limited to ``f_max``, Bernstein's
+inequality gives ``max|y^(6)| <= (2 pi f_max)^6 max|y|``, hence
 
-    |y_interp - y| <= (2 pi f_max h)^4 / 384 * max|y|   (and the same bound for y',
+    |y_interp - y| <= (2 pi f_max h)^6 / 46080 * max|y|   (and the same bound for y',
     relative to 2 pi f_max max|y|).
 
 The default ``h`` makes this bound ``interp_tol = 1e-10``:
-``h = (384 interp_tol)^(1/4) / (2 pi f_max) ~ 0.00223 / f_max``. The cross-fade windows
-widen the band by ~ 1/L Hz, a relative change of the bound of order 1/(L f_max).
+``h = (46080 interp_tol)^(1/6) / (2 pi f_max) ~ 0.0205 / f_max`` (:func:`quintic_step`; the
+cubic Hermite tables used before needed ``(384 interp_tol)^(1/4) / (2 pi f_max) ~ 0.00223 /
+f_max``, :func:`hermite_step`: 9.2x more nodes). The cross-fade windows widen the band by
+~ 1/L Hz, a relative change of the bound of order 1/(L f_max). (With the former quintic
+smoothstep fade, y''' jumped by (pi/2) 60/L^3 |z| at the fade's ends and moved y' there by
+~0.017 h^2 of that: 60x the bound for a 0.2 s fade at 80 Hz; the septic one has no jump.)
 """
 from __future__ import annotations
 
@@ -90,13 +98,17 @@ from nlbeam.excitation import CosineSum, Excitation, Sampled
 from . import _kernels
 
 __all__ = ["BandLimitedNoise", "SpectralNoise", "Realization", "Recorded", "hermite_step",
+           "quintic_step",
            "lines_on_grid", "AMPLITUDES"]
 
 #: amplitude laws of the block synthesis (see the module doc)
 AMPLITUDES = ("random", "deterministic")
 
 _DEFAULT_INTERP_TOL = 1e-10
-_DEFAULT_BLOCK_SAMPLES = 2 ** 18
+_DEFAULT_BLOCK_SAMPLES = 2 ** 18  # of a cubic table (Realization.blocks)
+# of a block noise's quintic table: 28672 h = 2.94 s at 200 Hz, the span (2.92 s) of the
+# former default, 2**18 steps of the cubic grid
+_DEFAULT_NOISE_BLOCK_SAMPLES = 28_672
 _MAX_TABLE_SAMPLES = 50_000_000
 _N_OFFSETS = 32  # line offsets u sampled to check how well the lines resolve a PSD
 
@@ -107,6 +119,16 @@ def hermite_step(f_max, interp_tol=_DEFAULT_INTERP_TOL):
     positive("f_max", f_max, unit="Hz")
     positive("interp_tol", interp_tol)
     return (384.0 * interp_tol) ** 0.25 / (2.0 * math.pi * f_max)
+
+
+def quintic_step(f_max, interp_tol=_DEFAULT_INTERP_TOL):
+    """Grid step h (s) at which quintic Hermite interpolation of a signal band-limited to
+    ``f_max`` (Hz) errs by at most ``interp_tol * max|y|``: (2 pi f_max h)^6/46080 = interp_tol
+    (the error is y^(6)(xi)/6! (t - a)^3 (t - b)^3 in a cell [a, b], and |y^(6)| <= (2 pi
+    f_max)^6 max|y| by Bernstein's inequality)."""
+    positive("f_max", f_max, unit="Hz")
+    positive("interp_tol", interp_tol)
+    return (46080.0 * interp_tol) ** (1.0 / 6.0) / (2.0 * math.pi * f_max)
 
 
 def _seed_entropy(seed):
@@ -180,29 +202,30 @@ def _decimation(n_fft, wh):
     return best, p
 
 
-def _lines_direct(f0, df, coeffs, h, m, n_fft):
-    """lines_on_grid by three inverse FFTs of length n_fft on the fine grid (reference)."""
+def _lines_direct(f0, df, coeffs, h, m, n_fft, n_deriv=2):
+    """lines_on_grid by n_deriv + 1 inverse FFTs of length n_fft on the fine grid (reference)."""
     K = coeffs.size
-    c = np.zeros((3, n_fft), dtype=complex)
+    c = np.zeros((n_deriv + 1, n_fft), dtype=complex)
     w = 2.0 * math.pi * (f0 + df * np.arange(K))
     c[0, :K] = coeffs
-    c[1, :K] = coeffs * (1j * w)
-    c[2, :K] = coeffs * (-w * w)
+    for q in range(1, n_deriv + 1):
+        c[q, :K] = c[q - 1, :K] * (1j * w)
     s = scipy.fft.ifft(c, axis=1, overwrite_x=True)[:, :m] * n_fft
     cyc = np.mod(f0 * h * np.arange(m), 1.0)
     return (s * np.exp(2j * math.pi * cyc)).real
 
 
-def lines_on_grid(f0, df, coeffs, h, m, n_fft):
-    """The line sum z(tau) = Re sum_k c_k exp(2 pi i (f0 + k df) tau) and its first two
-    derivatives at tau_j = j h, j = 0 .. m - 1 (s): array (3, m) in u, u/s, u/s^2.
+def lines_on_grid(f0, df, coeffs, h, m, n_fft, n_deriv=2):
+    """The line sum z(tau) = Re sum_k c_k exp(2 pi i (f0 + k df) tau) and its first
+    ``n_deriv`` derivatives at tau_j = j h, j = 0 .. m - 1 (s): array (n_deriv + 1, m) in u,
+    u/s, u/s^2, ...
 
     coeffs: complex c_k = a_k exp(i phi_k) (u), k = 0 .. K - 1, K <= n_fft; n_fft h must
     exceed the span (m - 1) h and equal 1/df. This is the inner loop of the block synthesis:
     any method with the same output to ~1e-12 relative may replace it without changing a
     statistic.
 
-    Method: z and its derivatives up to order P + 2 on a coarse grid of step R h (R a
+    Method: z and its derivatives up to order P + n_deriv on a coarse grid of step R h (R a
     divisor of n_fft, the grid nodes at the centres of runs of R fine nodes) by inverse
     FFTs of length n_fft / R (lines folded mod n_fft / R, exact), then every fine value by
     the Taylor series of order P about its centre: z^(q)(tau_c + d) = sum_n z^(q+n)(tau_c)
@@ -215,33 +238,34 @@ def lines_on_grid(f0, df, coeffs, h, m, n_fft):
     wmax = float(np.max(np.abs(w))) if K else 0.0
     R, P = _decimation(n_fft, max(wmax, 2.0 * math.pi * abs(f0)) * h)
     if R == 1:
-        return _lines_direct(f0, df, coeffs, h, m, n_fft)
+        return _lines_direct(f0, df, coeffs, h, m, n_fft, n_deriv)
     M = n_fft // R
     nc = -(-m // R)
     half = 0.5 * (R - 1)
     # spectrum rows d_n = c_k (i w_k h)^n exp(2 pi i k df tau_off), folded mod M
     iwh = 1j * w * h
     base = coeffs * np.exp(2j * math.pi * np.mod(np.arange(K) * (half / n_fft), 1.0))
-    powers = iwh[None, :] ** np.arange(P + 3)[:, None]
-    spec = np.zeros((P + 3, M), dtype=complex)
+    nr = P + 1 + n_deriv
+    powers = iwh[None, :] ** np.arange(nr)[:, None]
+    spec = np.zeros((nr, M), dtype=complex)
     rows = powers * base[None, :]
     if K <= M:
         spec[:, :K] = rows
     else:
         pad = -(-K // M) * M
-        full = np.zeros((P + 3, pad), dtype=complex)
+        full = np.zeros((nr, pad), dtype=complex)
         full[:, :K] = rows
-        spec[:] = full.reshape(P + 3, -1, M).sum(axis=1)
+        spec[:] = full.reshape(nr, -1, M).sum(axis=1)
     s = scipy.fft.ifft(spec, axis=1, overwrite_x=True)[:, :nc] * M
     cyc = np.mod(f0 * h * (R * np.arange(nc) + half), 1.0)
-    D = np.ascontiguousarray((s * np.exp(2j * math.pi * cyc)).real.T)  # (nc, P + 3)
+    D = np.ascontiguousarray((s * np.exp(2j * math.pi * cyc)).real.T)  # (nc, nr)
     d = np.arange(R) - half
     n = np.arange(P + 1)
     T = d[None, :] ** n[:, None] / scipy.special.factorial(n)[:, None]  # (P + 1, R)
-    out = np.empty((3, nc * R))
+    out = np.empty((n_deriv + 1, nc * R))
     # a compiled loop (not BLAS: a threaded BLAS spins on a loaded machine, 4x the CPU; not
     # einsum: its generic loop cost 58 % of the synthesis)
-    _kernels.taylor_rows(D, np.ascontiguousarray(T), np.array([1.0, h ** -1, h ** -2]), out)
+    _kernels.taylor_rows(D, np.ascontiguousarray(T), h ** -np.arange(n_deriv + 1.0), out)
     return out[:, :m]
 
 
@@ -261,7 +285,7 @@ class _BlockNoise(Excitation):
         self.duration = duration
         self.interp_tol = positive("interp_tol", interp_tol)
         if h is None:
-            h = hermite_step(self.band[1], self.interp_tol)
+            h = quintic_step(self.band[1], self.interp_tol)
         else:
             h = positive("h", h, unit="s")
             if self.band[1] * h >= 0.5:
@@ -269,7 +293,9 @@ class _BlockNoise(Excitation):
                                  f"for the band {self.band} Hz, got {h!r}")
         self.h = float(h)
         if block_duration is None:
-            nb = _DEFAULT_BLOCK_SAMPLES
+            # the default block's duration, whatever h: 28672 steps of the default step
+            nb = max(int(round(_DEFAULT_NOISE_BLOCK_SAMPLES
+                               * quintic_step(self.band[1], self.interp_tol) / self.h)), 16)
         else:
             block_duration = positive("block_duration", block_duration, unit="s")
             nb = int(round(block_duration / self.h))
@@ -291,7 +317,7 @@ class _BlockNoise(Excitation):
         self.df = 1.0 / (self.n_fft * self.h)
         self.n_lines = int(math.ceil((self.band[1] - self.band[0]) / self.df))
         # one realization: the complex spectrum, the real signal and its derivatives
-        check_memory(f"block synthesis: FFTs of {self.n_fft:.3g} points", 64.0 * self.n_fft,
+        check_memory(f"block synthesis: FFTs of {self.n_fft:.3g} points", 80.0 * self.n_fft,
                      "give a shorter block_duration, or a larger h")
         self._cache = OrderedDict()
 
@@ -447,22 +473,22 @@ class _BlockNoise(Excitation):
         return int(i)
 
     def _realization(self, i):
-        """z_i, z_i', z_i'' on tau_j = j h, j = 0 .. n_block + n_fade (a small LRU cache holds
-        the last realizations and blocks: memory stays that of a few blocks)."""
+        """z_i, z_i', z_i'', z_iy''' (rows) on tau_j = j h, j = 0 .. n_block + n_fade (a small
+        LRU cache holds the last realizations and blocks: memory stays that of a few blocks)."""
         if i in self._cache:
             self._cache.move_to_end(i)
             return self._cache[i]
         comp = self.components(i)
         a, ph, u = comp["amplitudes"], comp["phases"], comp["offset"]
         z = lines_on_grid(self.band[0] + u * self.df, self.df, a * np.exp(1j * ph), self.h,
-                          self.n_block + self.n_fade + 1, self.n_fft)
+                          self.n_block + self.n_fade + 1, self.n_fft, n_deriv=3)
         self._cache[i] = z
         while len(self._cache) > 4:
             self._cache.popitem(last=False)
         return z
 
     def _fade(self):
-        """(w_in, w_out) and their first two derivatives on the fade's n_fade + 1 nodes,
+        """(w_in, w_out) and their first three derivatives on the fade's n_fade + 1 nodes,
         computed once per noise (the same for every block)."""
         if "_fade_tables" not in self.__dict__:
             self._fade_tables = self._fade_compute()
@@ -472,20 +498,26 @@ class _BlockNoise(Excitation):
         nf = self.n_fade
         L = self.fade_duration
         s = np.arange(nf + 1) / nf
-        g = s ** 3 * (10.0 - 15.0 * s + 6.0 * s * s)
-        g1 = 30.0 * s * s * (1.0 - s) ** 2 / L
-        g2 = 60.0 * s * (1.0 - s) * (1.0 - 2.0 * s) / (L * L)
+        # septic smoothstep: g', g'', g''' vanish at both ends (y''' continuous at the joins,
+        # as the quintic interpolation of y' assumes)
+        g = s ** 4 * (35.0 - 84.0 * s + 70.0 * s * s - 20.0 * s ** 3)
+        g1 = 140.0 * (s * (1.0 - s)) ** 3 / L
+        g2 = 420.0 * (s * (1.0 - s)) ** 2 * (1.0 - 2.0 * s) / (L * L)
+        g3 = 840.0 * s * (1.0 - s) * (1.0 - 5.0 * s + 5.0 * s * s) / (L * L * L)
         th = 0.5 * math.pi * g
         th1 = 0.5 * math.pi * g1
         th2 = 0.5 * math.pi * g2
+        th3 = 0.5 * math.pi * g3
         sn, cs = np.sin(th), np.cos(th)
-        win = (sn, cs * th1, -sn * th1 * th1 + cs * th2)
-        wout = (cs, -sn * th1, -cs * th1 * th1 - sn * th2)
+        win = (sn, cs * th1, -sn * th1 * th1 + cs * th2,
+               -cs * th1 ** 3 - 3.0 * sn * th1 * th2 + cs * th3)
+        wout = (cs, -sn * th1, -cs * th1 * th1 - sn * th2,
+                sn * th1 ** 3 - 3.0 * cs * th1 * th2 - sn * th3)
         return win, wout
 
-    def block_arrays(self, i):
-        """(t_start, y, y', y'') of block ``i`` on ``t_start + j h``, j = 0 .. n_block
-        (s, m, m/s, m/s^2)."""
+    def block_table(self, i):
+        """(t_start, table) of block ``i``: the table (n_block + 1, 4) holds y, y', y'', y'''
+        (m, m/s, m/s^2, m/s^3) on ``t_start + j h``, j = 0 .. n_block."""
         i = self._block_index(i)
         key = ("block", i)
         if key in self._cache:
@@ -493,26 +525,37 @@ class _BlockNoise(Excitation):
             return self._cache[key]
         nb, nf = self.n_block, self.n_fade
         z = self._realization(i)
-        y = z[:, : nb + 1].copy()
-        if i > 0:
+        tab = np.empty((nb + 1, 4))
+        if i == 0:
+            tab[:] = z[:, : nb + 1].T
+        else:
+            tab[nf + 1:] = z[:, nf + 1: nb + 1].T
             zp = self._realization(i - 1)[:, nb: nb + nf + 1]
             zi = z[:, : nf + 1]
             win, wout = self._fade()
-            (w0, w1, w2), (v0, v1, v2) = win, wout
-            y[0, : nf + 1] = w0 * zi[0] + v0 * zp[0]
-            y[1, : nf + 1] = w1 * zi[0] + w0 * zi[1] + v1 * zp[0] + v0 * zp[1]
-            y[2, : nf + 1] = (w2 * zi[0] + 2.0 * w1 * zi[1] + w0 * zi[2]
-                              + v2 * zp[0] + 2.0 * v1 * zp[1] + v0 * zp[2])
-        res = (i * self.block_duration, y[0], y[1], y[2])
+            (w0, w1, w2, w3), (v0, v1, v2, v3) = win, wout
+            tab[: nf + 1, 0] = w0 * zi[0] + v0 * zp[0]
+            tab[: nf + 1, 1] = w1 * zi[0] + w0 * zi[1] + v1 * zp[0] + v0 * zp[1]
+            tab[: nf + 1, 2] = (w2 * zi[0] + 2.0 * w1 * zi[1] + w0 * zi[2]
+                                + v2 * zp[0] + 2.0 * v1 * zp[1] + v0 * zp[2])
+            tab[: nf + 1, 3] = (w3 * zi[0] + 3.0 * w2 * zi[1] + 3.0 * w1 * zi[2] + w0 * zi[3]
+                                + v3 * zp[0] + 3.0 * v2 * zp[1] + 3.0 * v1 * zp[2] + v0 * zp[3])
+        res = (i * self.block_duration, tab)
         self._cache[key] = res
         while len(self._cache) > 4:
             self._cache.popitem(last=False)
         return res
 
+    def block_arrays(self, i):
+        """(t_start, y, y', y'') of block ``i`` on ``t_start + j h``, j = 0 .. n_block
+        (s, m, m/s, m/s^2; views of :meth:`block_table`, which also holds y''')."""
+        t0, tab = self.block_table(i)
+        return t0, tab[:, 0], tab[:, 1], tab[:, 2]
+
     def block(self, i) -> Sampled:
-        """Block ``i`` as ``nlbeam.Sampled`` on [i B, (i+1) B] (s)."""
-        t0, y, yd, ydd = self.block_arrays(i)
-        return Sampled(t0, self.h, y, yd, ydd, max_freq=float(self.band[1]))
+        """Block ``i`` as ``nlbeam.Sampled`` (a quintic table) on [i B, (i+1) B] (s)."""
+        t0, tab = self.block_table(i)
+        return Sampled.from_table(t0, self.h, tab, max_freq=float(self.band[1]))
 
     def blocks(self, t_start=0.0, t_end=None, block_duration=None):
         """Yield ``nlbeam.Sampled`` tables covering [t_start, t_end] (s) block by block.
@@ -531,15 +574,15 @@ class _BlockNoise(Excitation):
         i0 = int(math.floor(t_start / B))
         i1 = max(i0, int(math.ceil(t_end / B)) - 1)
         for i in range(i0, i1 + 1):
-            tb, y, yd, ydd = self.block_arrays(i)
+            tb, tab = self.block_table(i)
             ja = 0
             jb = self.n_block
             if i == i0:
                 ja = min(max(int(math.floor((t_start - tb) / self.h + 1e-9)), 0), jb - 1)
             if i == i1:
                 jb = max(min(int(math.ceil((t_end - tb) / self.h - 1e-9)), jb), ja + 1)
-            yield Sampled(tb + ja * self.h, self.h, y[ja: jb + 1], yd[ja: jb + 1],
-                          ydd[ja: jb + 1], max_freq=float(self.band[1]))
+            yield Sampled.from_table(tb + ja * self.h, self.h, tab[ja: jb + 1],
+                                     max_freq=float(self.band[1]))
 
     def _span(self, t_start, t_end):
         t_start = finite("t_start", t_start)
@@ -564,9 +607,11 @@ class _BlockNoise(Excitation):
             raise ValueError(f"t_end: a single table of {n:.3g} samples is too large; iterate "
                              f"noise.blocks() or use stochastic.simulate")
         parts = list(self.blocks(t_start, t_end))
+        if len(parts) == 1:
+            return parts[0]
         t0 = parts[0].t_start
         tab = np.concatenate([parts[0].tab] + [p.tab[1:] for p in parts[1:]])
-        return Sampled(t0, self.h, tab[:, 0], tab[:, 1], tab[:, 2], max_freq=float(self.band[1]))
+        return Sampled.from_table(t0, self.h, tab, max_freq=float(self.band[1]))
 
     def kernel_args(self):
         """Kernel arrays of ``sampled(duration)`` (built once), so that a noise with a

@@ -1,5 +1,6 @@
-"""Excitation evaluation: y, y', y'' (m or N and rates) of a harmonic, a sampled table (cubic
-Hermite) or a sum of cosines at time t (s)."""
+"""Excitation evaluation: y, y', y'' (m or N and rates) of a harmonic (code 0), a sampled
+table (code 1: cubic Hermite from y, y', y''; code 3: quintic Hermite from y, y', y'', y''')
+or a sum of cosines (code 2) at time t (s)."""
 import math
 
 from .codes import ERR_EXCITATION_RANGE
@@ -8,7 +9,7 @@ from .hook import njit
 
 @njit(cache=True, inline="always")
 def _table_cell(t, p, tab):
-    """Cell of a sampled table (code 1) holding t: (i, th, th^2, th^3, h, status), th in [0, 1]
+    """Cell of a sampled table (code 1 or 3) holding t: (i, th, th^2, th^3, h, status), th in [0, 1]
     the position inside cell i; status ERR_EXCITATION_RANGE outside the table."""
     h = p[1]
     n = tab.shape[0]
@@ -41,9 +42,44 @@ def _table_y_yd(i, th, th2, th3, h, tab):
     return y, yd, False
 
 
+@njit(cache=True, inline="always")
+def _quintic(f0, g0, c0, f1, g1, c1, h):
+    """Coefficients (a0 .. a5) of p(th) = sum_k a_k th^k, th in [0, 1] across a cell of length
+    h (s), with p = f, dp/dt = g, d2p/dt2 = c at both ends: the quintic Hermite interpolant."""
+    a1 = h * g0
+    a2 = 0.5 * h * h * c0
+    r0 = f1 - f0 - a1 - a2
+    r1 = h * g1 - a1 - 2.0 * a2
+    r2 = h * h * c1 - 2.0 * a2
+    a3 = 10.0 * r0 - 4.0 * r1 + 0.5 * r2
+    a4 = -15.0 * r0 + 7.0 * r1 - r2
+    a5 = 6.0 * r0 - 3.0 * r1 + 0.5 * r2
+    return f0, a1, a2, a3, a4, a5
+
+
+@njit(cache=True, inline="always")
+def _quintic_y_yd(i, th, h, tab):
+    """Quintic Hermite y from (y, y', y'') and y' from (y', y'', y''') in cell i of a table with
+    the columns y, y', y'', y''' (code 3): (y, y', b1 .. b5), b_k the coefficients of y' in th."""
+    a0, a1, a2, a3, a4, a5 = _quintic(tab[i, 0], tab[i, 1], tab[i, 2], tab[i + 1, 0],
+                                      tab[i + 1, 1], tab[i + 1, 2], h)
+    b0, b1, b2, b3, b4, b5 = _quintic(tab[i, 1], tab[i, 2], tab[i, 3], tab[i + 1, 1],
+                                      tab[i + 1, 2], tab[i + 1, 3], h)
+    y = a0 + th * (a1 + th * (a2 + th * (a3 + th * (a4 + th * a5))))
+    yd = b0 + th * (b1 + th * (b2 + th * (b3 + th * (b4 + th * b5))))
+    return y, yd, b1, b2, b3, b4, b5
+
+
 @njit(cache=True)
 def excite(t, code, p, tab):
     """(y, y', y'', status) at time t (s)."""
+    if code == 3:
+        i, th, th2, th3, h, st = _table_cell(t, p, tab)
+        if st != 0:
+            return 0.0, 0.0, 0.0, st
+        y, yd, b1, b2, b3, b4, b5 = _quintic_y_yd(i, th, h, tab)
+        ydd = (b1 + th * (2.0 * b2 + th * (3.0 * b3 + th * (4.0 * b4 + th * 5.0 * b5)))) / h
+        return y, yd, ydd, 0
     if code == 0:
         arg = p[1] * t + p[2]
         c = math.cos(arg)
@@ -82,7 +118,13 @@ def excite(t, code, p, tab):
 def excite_yyd(t, code, p, tab):
     """(y, y', status) at time t: ``excite`` without y'' (what a right-hand side needs). The
     sampled table (code 1) is evaluated by the same expressions as in ``excite`` (bit for bit
-    the same y, y'), without the y'' polynomial."""
+    the same y, y'), without the y'' polynomial; so is the quintic table (code 3)."""
+    if code == 3:
+        i, th, th2, th3, h, st = _table_cell(t, p, tab)
+        if st != 0:
+            return 0.0, 0.0, st
+        y, yd, b1, b2, b3, b4, b5 = _quintic_y_yd(i, th, h, tab)
+        return y, yd, 0
     if code != 1:
         y, yd, ydd, st = excite(t, code, p, tab)
         return y, yd, st
@@ -97,6 +139,12 @@ def excite_yyd(t, code, p, tab):
 def excite_jerk(t, code, p, tab):
     """y''' at time t: the derivative of the y'' that ``excite`` returns (0 on a sampled table
     without a y'' column, where that y'' is constant in each cell)."""
+    if code == 3:
+        i, th, th2, th3, h, st = _table_cell(t, p, tab)
+        if st != 0:
+            return 0.0
+        y, yd, b1, b2, b3, b4, b5 = _quintic_y_yd(i, th, h, tab)
+        return (2.0 * b2 + th * (6.0 * b3 + th * (12.0 * b4 + th * 20.0 * b5))) / (h * h)
     if code == 0:
         return p[0] * p[1] * p[1] * p[1] * math.sin(p[1] * t + p[2])
     elif code == 1:

@@ -22,9 +22,9 @@ def direct(comp, t):
 
 
 def fade(s, L):
-    """The documented cross-fade: w_in = sin(pi/2 g), w_out = cos(pi/2 g), g quintic smoothstep."""
-    g = s ** 3 * (10 - 15 * s + 6 * s ** 2)
-    g1 = 30 * s ** 2 * (1 - s) ** 2 / L
+    """The documented cross-fade: w_in = sin(pi/2 g), w_out = cos(pi/2 g), g septic smoothstep."""
+    g = 35 * s ** 4 - 84 * s ** 5 + 70 * s ** 6 - 20 * s ** 7
+    g1 = (140 * s ** 3 - 420 * s ** 4 + 420 * s ** 5 - 140 * s ** 6) / L
     th, th1 = np.pi / 2 * g, np.pi / 2 * g1
     return np.sin(th), np.cos(th), np.cos(th) * th1, -np.sin(th) * th1
 
@@ -452,3 +452,41 @@ def test_kurtosis_bias_predicts_the_linear_response_of_the_blocks(amplitudes, df
         assert abs(pred) < 0.01
     else:
         assert pred > 0.15
+
+
+def test_third_derivative_column_is_the_line_sums_and_the_fades(small_noise):
+    """The quintic tables' y''' column: the direct sum's third derivative on a block's plateau,
+    and across a cross-fade the derivative of its y'' (central differences of the exact y')."""
+    n = small_noise
+    t0, tab = n.block_table(1)
+    j = np.arange(n.n_fade, n.n_block + 1)
+    c = n.components(1)
+    tau = t0 + j * n.h - c["t_ref"]
+    w = 2 * np.pi * c["frequencies"]
+    y3 = np.sin(np.outer(tau, w) + c["phases"]) @ (c["amplitudes"] * w ** 3)
+    assert np.max(np.abs(tab[j, 3] - y3)) < 1e-10 * np.max(np.abs(y3))
+    # inside the fade: y''' against a second central difference of the exact y'
+    t = t0 + np.arange(5, n.n_fade - 4) * n.h
+    e = 2e-5
+    _, yp = composite(n, t + e)
+    _, y0 = composite(n, t)
+    _, ym = composite(n, t - e)
+    fd = (yp - 2 * y0 + ym) / e ** 2
+    assert np.max(np.abs(tab[5: n.n_fade - 4, 3] - fd)) < 1e-4 * np.max(np.abs(fd))
+
+
+@pytest.mark.parametrize("n_fft", [43120, 43121])  # the Taylor path, and the direct FFTs
+def test_lines_on_grid_has_the_exact_variance_of_its_lines(n_fft):
+    """Lines on the FFT grid (f_k = k df) over one full period n_fft h: the discrete mean of
+    z^2 is sum a_k^2 / 2 exactly (orthogonality), and of (z^(q))^2 sum (w_k^q a_k)^2 / 2."""
+    h = st.quintic_step(200.0)
+    df = 1.0 / (n_fft * h)
+    K = int(200.0 / df)
+    rng = np.random.default_rng(7)
+    a = rng.rayleigh(1.0, K)
+    c = a * np.exp(2j * np.pi * rng.random(K))
+    z = st.noise.lines_on_grid(df, df, c, h, n_fft, n_fft, n_deriv=3)
+    w = 2 * np.pi * df * np.arange(1, K + 1)
+    for q in range(4):
+        want = np.sum((w ** q * a) ** 2) / 2
+        assert abs(np.mean(z[q] ** 2) - want) < 1e-12 * want, (q, np.mean(z[q] ** 2), want)
