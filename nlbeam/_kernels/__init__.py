@@ -16,6 +16,10 @@ built by ``nlbeam.System.kernel_arrays``), the excitation (code, p, tab), and fo
 Element e: delta_e = ew_e . x + ewy_e * y - egap_e, generalised force -ew_e f_e.
 Discrete state ``disc`` (ne, 2): [in_contact (0/1), delta'_minus].
 """
+from .stale_cache import check_package as _check_cache
+
+_check_cache()  # before any kernel loads: caches built from other sources are dropped
+
 from .bundles import Outputs, Settings, Start, SystemArrays, Work, outputs, settings, start
 from .codes import (_A_DP5, _A_RK2, _A_RK4, _B_DP5, _B_RK2, _B_RK4, _BH_DP5, _C_DP5,
                     _C_RK2, _C_RK4, CUBIC, DP5, ERR_EVENT, ERR_EXCITATION_RANGE, ERR_MAX_STEPS,
