@@ -287,10 +287,16 @@ def _on_branch(branches, order, f, xmax, state0, rel=2e-3, state_rel=0.05):
     states at t = k / f, k = 0..order-1 (the same orbit seen from each excitation period), or a
     callable giving them), or None. The point must lie within ``rel`` (relative, plus a
     twentieth of the local segment length) of the branch's (f, xmax) polyline, and its state at
-    t = 0 within ``state_rel`` of the state interpolated there (in units of the orbit's size)."""
+    t = 0 within ``state_rel`` of the state interpolated there (in units of the orbit's size).
+    Past an end where the map jumps ('discontinuous map') the branch does not go on: there a
+    point nearest to a segment's end (not between its ends) is the orbit on the jump's far
+    side, not on the branch."""
     for bi, b in enumerate(branches):
         if b.order != order or len(b.frequency) < 2:
             continue
+        fb = b.frequency
+        past_last = b.ends[1] == _JUMP and (f - fb[-1]) * (fb[-1] - fb[-2]) > 0
+        past_first = b.ends[0] == _JUMP and (f - fb[0]) * (fb[0] - fb[1]) > 0
         F = b.frequency / f - 1.0
         X = b.xmax / xmax - 1.0
         dF, dX = np.diff(F), np.diff(X)
@@ -300,6 +306,8 @@ def _on_branch(branches, order, f, xmax, state0, rel=2e-3, state_rel=0.05):
         ok = np.nonzero(dist <= rel + 0.05 * np.sqrt(L2))[0]
         shifts = None
         for i in ok:
+            if (past_last and lam[i] >= 1.0) or (past_first and lam[i] <= 0.0):
+                continue
             s_b = b.state0[i] + lam[i] * (b.state0[i + 1] - b.state0[i])
             if shifts is None:
                 shifts = state0() if callable(state0) else state0
