@@ -145,3 +145,32 @@ def test_harmonic_amplitudes_follow_the_integrator():
     assert 0 < 4 * e64 < e16
     assert np.array_equal(_harmonic_amplitudes(m, A, f, s0),
                           _harmonic_amplitudes(m, A, f, s0, integrator=C.Integrator()))
+
+
+def test_a_point_past_a_discontinuous_map_end_is_not_on_that_branch():
+    """The far side of a jump of the map (an orbit just beyond a 'discontinuous map' end, close
+    to the end point in (f, xmax, state)) is not taken for the branch: before, the far-side
+    branch at 9.19509 Hz (paper model, A = 0.1 mm, dt caps) stopped there as 'ran onto a traced
+    branch' and left 9.19460-9.19509 Hz uncovered. Between a segment's ends, or past an end
+    of another kind, the same point is on the branch."""
+    from types import SimpleNamespace
+
+    f = np.array([9.1940, 9.1943, 9.1945, 9.1946])
+    xm = np.full(4, 1.26e-4)
+    s0 = np.tile([9.93e-5, -8.33e-4], (4, 1))
+    w = 2 * np.pi * 9.195
+
+    def branch(ends):
+        return SimpleNamespace(order=1, frequency=f, xmax=xm, state0=s0, ends=ends)
+
+    past = (9.1951, 1.2614e-4, s0[-1] * (1 + 1e-3))  # beyond the last end, within tolerances
+    inside = (9.19445, 1.2602e-4, s0[-1] * (1 + 1e-3))
+    for fp, xp, sp in (past, inside):
+        assert np.max(np.abs(sp - s0[-1]) / np.r_[xp, xp * w]) < 0.05
+    assert _on_branch([branch(("", "discontinuous map"))], 1, *past) is None
+    assert _on_branch([branch(("", "left the parameter range"))], 1, *past) == 0
+    assert _on_branch([branch(("", "discontinuous map"))], 1, *inside) == 0
+    # the same at the first end, the branch stored in the other direction
+    rev = SimpleNamespace(order=1, frequency=f[::-1], xmax=xm, state0=s0,
+                          ends=("discontinuous map", ""))
+    assert _on_branch([rev], 1, *past) is None
