@@ -1,0 +1,104 @@
+"""Fold-grazing points on a grazing curve (issue 14: codimension-2 points) against the closed
+form of tests/exact_pwl.py.
+
+The oscillator: f_n = 1 Hz, damping ratio 0.02, a stop 100 k after 0.1 m, force 4 N. Between
+0.5 and 0.7 Hz the order-1 orbit already impacts once per period and a second, lower peak of
+x grazes the stop: the grazing curve of that peak in (f, amplitude) carries orbits whose
+monodromy is not the free one, and a real multiplier crosses +1 on it (fold-grazing). There
+the exact orbit solves det(M - I) = 0 and (its second peak) = gap together: solved here by
+Newton on the exact period map."""
+import warnings
+
+import numpy as np
+import pytest
+import scipy.optimize
+
+import continuation
+from exact_pwl import StopOscillator, period_map
+
+A0 = 4.0
+
+
+def _osc(amplitude, gap=0.1):
+    return StopOscillator.tuned(ratio=100.0, gap=gap, amplitude=amplitude)
+
+
+def _peak(o, f, z0):
+    """The maximum of x (m) of the exact orbit through z0 at t = 0 closest to 0.1 m, the
+    grazing peak (maxima where v goes from + to -: bracketed on 400 samples per segment,
+    then Brent; the deep contact's maximum lies far above 0.1 m)."""
+    _, _, segs, fl = period_map(o, f, z0)
+    peaks = []
+    for (r, ta, tb, za) in segs:
+        ts = np.linspace(ta, tb, 401)
+        v = fl.states(r, ta, za, ts)[1]
+        for i in np.flatnonzero((v[:-1] > 0) & (v[1:] <= 0)):
+            t = scipy.optimize.brentq(lambda t: fl.states(r, ta, za, t)[1, 0], ts[i],
+                                      ts[i + 1], xtol=1e-15, rtol=1e-15)
+            peaks.append(float(fl.states(r, ta, za, t)[0, 0]))
+    return min(peaks, key=lambda x: abs(x - 0.1))
+
+
+def _exact_fold_grazing(f, A, z0, lift):
+    """(f, A) where the exact orbit has a multiplier +1 and its highest free peak touches the gap
+    0.1 m, for a flow whose stop sits ``lift`` (relative) above that gap (so the touching
+    peak stays free: the grazing orbit's monodromy is the limit from the free side; the
+    shallow contact's square-root term would spoil the Jacobian): Newton on
+    (P(z0) - z0, det(M - I), peak - 0.1) in (z0, f, A), scaled (at the fold the orbit at
+    fixed (f, A) is degenerate, so z0 is an unknown, not a Newton solve)."""
+    S = np.r_[np.abs(z0).max(), np.abs(z0).max(), f, A]
+
+    def eqs(u):
+        z, ff, aa = u[:2] * S[:2], u[2] * S[2], u[3] * S[3]
+        o = _osc(aa, 0.1 * (1 + lift))
+        zT, M, _, _ = period_map(o, ff, z)
+        return np.r_[(zT - z) / S[:2], np.linalg.det(M - np.eye(2)),
+                     (_peak(o, ff, z) - 0.1) / 0.1]
+
+    u = np.r_[z0, f, A] / S
+    for _ in range(20):  # Newton, Jacobian by forward differences (1e-7 of the scaled u)
+        r = eqs(u)
+        J = np.array([(eqs(u + 1e-7 * e) - r) / 1e-7 for e in np.eye(4)]).T
+        du = np.linalg.solve(J, -r)
+        u = u + du * min(1.0, 0.01 / np.max(np.abs(du)))  # damped
+        if np.max(np.abs(du)) < 1e-12:
+            break
+    assert np.max(np.abs(eqs(u))) < 1e-11, eqs(u)
+    return np.array([u[2] * S[2], u[3] * S[3]])
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "issue 14: multipliers on a grazing curve are spoiled where the integrator sees a tiny "
+    "contact at the tangent peak (measured against the exact monodromy: 5e-6 at most curve "
+    "points, 4.6e-3 and 5.3e-2 at two of them), so the first fold-grazing point is 6.9e-5 Hz "
+    "/ 5.7e-4 N off, its stated error 3.1e-5 Hz / 2.5e-4 N; fix in continuation/extended.py "
+    "(the grazing orbit's monodromy from the free side)"))
+def test_fold_grazing_points_on_a_grazing_curve_against_the_closed_form():
+    """The grazing curve from the diagram's grazing point near 0.505 Hz at 4 N, traced in
+    amplitude over 0.3-12 N, reports two fold-grazing points; each agrees with the exact one
+    (Newton on the closed form) within its stated errors (bracket + integration error).
+    Measured (exact: 0.5570604 Hz, 1.2585253 N and 0.6380301 Hz, 2.2254968 N): the first off
+    by 6.9e-5 Hz, -5.7e-4 N (stated 3.1e-5 Hz, 2.5e-4 N: fails); the second by -1.5e-7 Hz,
+    -8.7e-7 N (stated 3.0e-4 Hz, 7.8e-3 N: 2000 times pessimistic). 6 s CPU."""
+    osc = _osc(A0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", continuation.ContinuationWarning)
+        d = continuation.frequency_response(osc.system(), A0, (0.3, 1.0), orders=(1,),
+                                            accuracy="off")
+        g = min((b for b in d.bifurcations if b.kind == "grazing"),
+                key=lambda b: abs(b.frequency - 0.505))
+        c = continuation.bifurcation_curve(osc.system(), g, (0.3, 12.0), amplitude=A0,
+                                           f_range=(0.2, 1.5), max_points=200)
+    fg = [p for p in c.special if p.kind == "fold-grazing"]
+    assert len(fg) == 2, c.special
+    out = []
+    for p in fg:
+        j = p.index
+        # extrapolated to a lift of 0 from 1e-6 and 2e-6 (linear in the lift)
+        e1, e2 = (_exact_fold_grazing(c.frequency[j], c.values[j], c.state0[j], lift)
+                  for lift in (1e-6, 2e-6))
+        f_ex, A_ex = 2 * e1 - e2
+        out.append((p, f_ex, A_ex))
+    for p, f_ex, A_ex in out:
+        assert abs(p.frequency - f_ex) <= p.error_frequency, (p, f_ex)
+        assert abs(p.value - A_ex) <= p.error_value, (p, A_ex)

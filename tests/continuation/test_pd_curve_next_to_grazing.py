@@ -1,0 +1,59 @@
+"""A period-doubling curve next to a grazing curve (issue 14: codimension-2 points on a curve).
+
+With a continuous piecewise-linear stop (the force ks max(delta, 0) vanishes at contact), the
+monodromy of an orbit that just grazes is that of the free orbit (complex multipliers of
+modulus exp(-zeta w T) < 1), so a period-doubling curve of order-1 orbits cannot cross the
+grazing curve of their only contact: where the contact is shallow the multipliers move like
+the square root of its depth, and a stiff stop's period-doubling curve runs along the grazing
+curve at a contact depth of a few micrometres without meeting it. bifurcation_curve must then
+report no flip-grazing point and its points must be those of the closed form
+(tests/exact_pwl.py). (A flip-grazing point needs a second contact grazing while the first one
+is deep; not covered here.)"""
+import warnings
+
+import numpy as np
+import scipy.optimize
+
+import continuation
+from exact_pwl import StopOscillator, orbit
+
+# f_n = 1 Hz, damping ratio 0.02, stop 100 k after 0.1 m, 1 N: the period doubling of the
+# harmonic branch at 0.8655634 Hz lies next to its lower grazing point (test_exact_pwl.py)
+F_PD = 0.865563379652703
+AT = (0.8, 1.2, 1.5)
+
+
+def _osc(amplitude):
+    return StopOscillator.tuned(ratio=100.0, gap=0.1, amplitude=amplitude)
+
+
+def test_period_doubling_curve_along_the_grazing_curve_against_the_closed_form():
+    """The curve in (f, amplitude) from the period doubling at 1 N, with points placed at
+    0.8, 1.2 and 1.5 N: there each frequency is the closed-form period doubling (Brent on
+    det(M + I) of the exact orbit) within the point's stated error; the exact orbit there
+    impacts (xmax > gap, one contact per period) and no flip-grazing point is reported.
+    Measured: |curve - exact| 1.0e-8, 1.2e-8, 1.4e-8 Hz against stated 2.0e-8, 2.3e-8,
+    2.6e-8 Hz; contact depths 3.1e-5, 7.3e-6, 2.6e-6 m (0.5 s CPU for the curve)."""
+    osc = _osc(1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", continuation.ContinuationWarning)
+        sol = continuation.periodic_solution(osc.system(), 1.0, F_PD, error=False)
+        bf = {"kind": "period-doubling", "frequency": F_PD, "order": 1, "state0": sol.state0}
+        c = continuation.bifurcation_curve(osc.system(), bf, (0.5, 2.0), amplitude=1.0,
+                                           f_range=(0.5, 3.0), at=AT, max_points=60)
+    assert not [p for p in c.special if p.kind == "flip-grazing"], c.special
+    assert np.all(c.n_impacts == 1)
+    for A in AT:
+        f_curve, err = c.at(A), c.error_at(A)
+        assert len(f_curve) == 1 and np.isfinite(err[0]), (A, f_curve, err)
+        f, e = float(f_curve[0]), float(err[0])
+        j = int(np.argmin(np.abs(c.frequency - f) + np.abs(c.values - A)))
+        o = _osc(A)
+
+        def det(ff):
+            return np.linalg.det(orbit(o, ff, c.state0[j]).monodromy + np.eye(2))
+
+        f_ex = scipy.optimize.brentq(det, f * (1 - 1e-5), f * (1 + 1e-5), xtol=1e-14)
+        assert abs(f - f_ex) <= e, (A, f, f_ex, e)
+        ex = orbit(o, f_ex, c.state0[j])
+        assert ex.n_impacts == 1 and ex.xmax > o.gap, (A, ex.n_impacts, ex.xmax)
