@@ -8,7 +8,8 @@ HDF5 (they import h5py; ``stamped_hdf5`` adds format and checksums); the results
 """
 from .atomic import (atomic_path, remove_stale_temporaries, write_bytes_atomic,
                      write_text_atomic)
-from .keys import canonical_json, code_fingerprint, content_key
+from .keys import canonical_json, code_fingerprint, content_key, file_sha256
 
 __all__ = ["atomic_path", "write_bytes_atomic", "write_text_atomic",
-           "remove_stale_temporaries", "canonical_json", "content_key", "code_fingerprint"]
+           "remove_stale_temporaries", "canonical_json", "content_key", "file_sha256",
+           "code_fingerprint"]

@@ -7,8 +7,8 @@ import hashlib
 import json
 import math
 
-__all__ = ["canonical_json", "content_key", "code_fingerprint", "analysis_fingerprint",
-           "ANALYSIS_CODE"]
+__all__ = ["canonical_json", "content_key", "file_sha256", "code_fingerprint",
+           "analysis_fingerprint", "ANALYSIS_CODE"]
 
 
 def _plain(v):
@@ -38,6 +38,15 @@ def canonical_json(obj) -> str:
 def content_key(obj, length=16) -> str:
     """Hex SHA-256 (first ``length`` digits) of ``canonical_json(obj)``."""
     return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:length]
+
+
+def file_sha256(path) -> str:
+    """Hex SHA-256 of the bytes of the file at ``path`` (read in 1 MiB blocks)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
 
 
 _CODE = {}

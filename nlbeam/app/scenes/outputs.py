@@ -11,7 +11,6 @@ measured record, and a stability chart, are always drawn).
 from __future__ import annotations
 
 import csv
-import hashlib
 import io
 import json
 import math
@@ -19,7 +18,7 @@ import os
 
 from .. import defaults
 from ..compare import map_peaks
-from ..files import code_fingerprint, content_key, write_text_atomic
+from ..files import code_fingerprint, content_key, file_sha256, write_text_atomic
 from ..plots.scene import scene_figure
 from .bifurcation_list import bifurcation_rows
 from .chart_outputs import chart_figure, chart_table, chart_variants
@@ -90,14 +89,6 @@ def planned_files(scene, jobs, out_dir):
     return out
 
 
-def _sha256(path):
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def _result_sha(path):
     """The checksum of a cached result recorded beside it (its .json), or None."""
     try:
@@ -151,7 +142,7 @@ def _up_to_date(entry, stamp, out_dir):
     for name, sha in files.items():
         path = os.path.join(out_dir, name)
         try:
-            if _sha256(path) != sha:
+            if file_sha256(path) != sha:
                 return None
         except OSError:
             return None
@@ -205,7 +196,7 @@ def write_outputs(scene, jobs, results, out_dir, log, load=None):
                 log(f"nlbeam: wrote {f}")
             files += new
             record[d["file"]] = {"stamp": stamp, "files": {
-                os.path.relpath(f, out_dir): _sha256(f) for f in new}}
+                os.path.relpath(f, out_dir): file_sha256(f) for f in new}}
         os.makedirs(os.path.dirname(_record_path(out_dir)), exist_ok=True)
         write_text_atomic(_record_path(out_dir), json.dumps(record, indent=1, sort_keys=True))
     if kept:

@@ -20,13 +20,12 @@ result swapped in is marked for recomputation (``Job.problem`` says why).
 """
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 from dataclasses import dataclass
 
 from .. import defaults
-from ..files import canonical_json, content_key
+from ..files import canonical_json, content_key, file_sha256
 from ..files.keys import analysis_fingerprint
 from .models import model_inputs
 from .schema import CHART_OUTPUTS, history_channels, history_window
@@ -137,18 +136,10 @@ def plan(scene, out_dir):
     return jobs
 
 
-def _sha256_file(path):
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def entry_record(inputs, path, warned=()):
     """The sidecar text of a cache entry: its inputs, the SHA-256 of its result file and the
     warnings its computation gave (repeated when the entry is reused)."""
-    return canonical_json({"inputs": inputs, "result_sha256": _sha256_file(path),
+    return canonical_json({"inputs": inputs, "result_sha256": file_sha256(path),
                            "warnings": [str(w) for w in warned]}) + "\n"
 
 
@@ -168,7 +159,7 @@ def check_entry(path, inputs, kind):
     if canonical_json(recorded) != canonical_json(inputs):
         return "it records other inputs (a different result under this key)"
     try:
-        if _sha256_file(path) != sha:
+        if file_sha256(path) != sha:
             return "its bytes differ from the recorded checksum (changed or swapped)"
         name = {"periodic": "nlbeam.frequency_response", "chart": "nlbeam.bifurcation_curves"
                 }.get(kind, "nlbeam.stochastic.result")

@@ -452,21 +452,19 @@ def _columns_file(scene_path, name, key, required, fail):
 def _record(scene_path, s, fail):
     """record, record_time, record_column of a [stochastic] with a measured excitation: the
     absolute path and the SHA-256 of its bytes (so that the cache key follows the data)."""
-    import hashlib
-
     out = {"record_time": s.get("record_time", "t"), "record_column": s.get("record_column",
                                                                              "y")}
     out["record"] = _columns_file(scene_path, s["record"], ("stochastic", "record"),
                                   (out["record_time"], out["record_column"]), fail)
     from ..files.columns import read_columns
+    from ..files.keys import file_sha256
 
     t = read_columns(out["record"])[out["record_time"]]
     need = s["duration"] + (s["transient"] or 0.0)  # (a default transient: checked by simulate)
     if t.size < 2 or t[-1] - t[0] < need * (1 - 1e-9):
         fail(("stochastic", "duration"), f"transient + duration = {need:g} s exceed the record "
              f"{s['record']} ({t[-1] - t[0] if t.size else 0:g} s long)", s["duration"])
-    with open(out["record"], "rb") as fh:
-        out["record_sha256"] = hashlib.sha256(fh.read()).hexdigest()
+    out["record_sha256"] = file_sha256(out["record"])
     return out
 
 
