@@ -43,11 +43,38 @@ def _store(n_stored, t, s, disc, xc, xp, xtab, sysa, out_t, out_s, out_d, out_f)
     return n_stored + 1
 
 
-@njit(cache=True, _nrt=True)
+_WANT_VAR = Settings._fields.index("want_var")
+
+
 def integrate_kernel(system, xc, xp, xtab, settings, start, outputs):
-    """Integrate from t0 to t_end: ``system``, ``settings``, ``start`` and ``outputs`` are the
-    fields of SystemArrays, Settings, Start and Outputs (bundles.py), (xc, xp, xtab) the
-    excitation. Returns the status.
+    """Integrate from t0 to t_end (``integrate_var`` when the settings ask for the variational
+    equations, else ``integrate_plain``; a Python function: each of the two compiled kernels
+    compiles, or loads from the disk cache, only when first called: a process that never asks
+    for a monodromy never compiles the variational loop, the larger part of the compile time).
+    ``system``, ``settings``, ``start`` and ``outputs`` are the fields of SystemArrays,
+    Settings, Start and Outputs (bundles.py), (xc, xp, xtab) the excitation. Returns the
+    status."""
+    kernel = integrate_var if settings[_WANT_VAR] else integrate_plain
+    return kernel(system, xc, xp, xtab, settings, start, outputs)
+
+
+@njit(cache=True, _nrt=True)
+def integrate_plain(system, xc, xp, xtab, settings, start, outputs):
+    """integrate_kernel without the variational equations (the settings' want_var is not
+    read)."""
+    return _integrate(system, xc, xp, xtab, settings, start, outputs, False)
+
+
+@njit(cache=True, _nrt=True)
+def integrate_var(system, xc, xp, xtab, settings, start, outputs):
+    """integrate_kernel with the variational equations (the settings' want_var is not read)."""
+    return _integrate(system, xc, xp, xtab, settings, start, outputs, True)
+
+
+@njit(cache=True, _nrt=True)
+def _integrate(system, xc, xp, xtab, settings, start, outputs, want_var):
+    """The integration from t0 to t_end, ``want_var`` a literal (integrate_plain,
+    integrate_var): the work arrays are allocated here, then ``_integrate_loop`` runs.
 
     Fixed-step methods (RK2, RK4) step on the grid t0 + k dt in free flight; inside a contact
     they take steps of (estimated contact duration) / spc, starting from the onset and ignoring
@@ -100,9 +127,7 @@ def integrate_kernel(system, xc, xp, xtab, settings, start, outputs):
                 KP1=np.zeros((ns, n, 1)), SR1=np.zeros((SR_ROWS, 1)), Bv=np.zeros(n))
     # want_var as a compile-time constant: the loop without the variational equations is
     # compiled without their code (numba prunes the branches on a literal argument)
-    if cfg.want_var:
-        return _integrate_loop(sysa, xc, xp, xtab, cfg, Outputs(*outputs), work, True)
-    return _integrate_loop(sysa, xc, xp, xtab, cfg, Outputs(*outputs), work, False)
+    return _integrate_loop(sysa, xc, xp, xtab, cfg, Outputs(*outputs), work, want_var)
 
 
 @njit(cache=True)
@@ -178,8 +203,10 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
     h = h_init
     status = 0
     en = 1.0
-    phase = 0       # 0: time steps; 1: onset, steps in sigma; 2: exit, steps in u
-    pe = -1         # the element of the graded phase
+    # (typed int64 from the start: numba's first typing pass would otherwise see the literals
+    # 0 and -1 and compile a dead copy of every step function for them, ~1/4 of the compile)
+    phase = np.int64(0)  # 0: time steps; 1: onset, steps in sigma; 2: exit, steps in u
+    pe = np.int64(-1)    # the element of the graded phase
     g_t0 = 0.0
     g_u = 0.0
     g_end = 0.0
