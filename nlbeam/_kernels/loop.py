@@ -71,10 +71,11 @@ def integrate_var(system, xc, xp, xtab, settings, start, outputs):
     return _integrate(system, xc, xp, xtab, settings, start, outputs, True)
 
 
-@njit(cache=True, _nrt=True)
+@njit(cache=True, _nrt=True, inline="always")
 def _integrate(system, xc, xp, xtab, settings, start, outputs, want_var):
     """The integration from t0 to t_end, ``want_var`` a literal (integrate_plain,
-    integrate_var): the work arrays are allocated here, then ``_integrate_loop`` runs.
+    integrate_var): the work arrays are allocated here, then ``_integrate_loop`` runs. Inlined
+    (a dispatcher level of its own around the loop cost 5-13 s CPU more to compile).
 
     Fixed-step methods (RK2, RK4) step on the grid t0 + k dt in free flight; inside a contact
     they take steps of (estimated contact duration) / spc, starting from the onset and ignoring
@@ -207,6 +208,8 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
     # 0 and -1 and compile a dead copy of every step function for them, ~1/4 of the compile)
     phase = np.int64(0)  # 0: time steps; 1: onset, steps in sigma; 2: exit, steps in u
     pe = np.int64(-1)    # the element of the graded phase
+    row_t = np.int64(SR_T)    # the rows of SR a sensitive step writes (int64 as well: one
+    row_tn = np.int64(SR_TN)  # compiled copy of rk_step_sens and var_time_step for both)
     g_t0 = 0.0
     g_u = 0.0
     g_end = 0.0
@@ -276,7 +279,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                         SR[SR_H, c] = SR[SR_GEND, c] - SR[SR_U0, c]
                 st, t_new = rk_step_sens(meth, phase, g_u, hs, g_t0, pe, s, t, P, dvm, disc,
                                          sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp,
-                                         Ptmp, fel, ft, err_w, SR, SR_T)
+                                         Ptmp, fel, ft, err_w, SR, row_t)
                 sens_step = True
             else:
                 st, t_new = rk_step_graded(meth, 1, g_u, hs, g_t0, pe, s, t, P, dvm, disc, False,
@@ -319,7 +322,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                     SR[SR_H, c] = -SR[SR_U0, c] if hu == g_u else -SR[SR_GH, c]
                 st, t_new = rk_step_sens(meth, phase, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, sysa,
                                          xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel,
-                                         ft, err_w, SR, SR_T)
+                                         ft, err_w, SR, row_t)
                 sens_step = True
             else:
                 st, t_new = rk_step_graded(meth, 2, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, False,
@@ -361,7 +364,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                                 dummyP[q, c] = P_new[q, c]
                     st = var_time_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var,
                                        sysa, xc, xp, xtab, f1, s_new, P_new, KS, KP, KT, ytmp,
-                                       Ptmp, fel, err_w, ft, SR, SR_TN)
+                                       Ptmp, fel, err_w, ft, SR, row_tn)
                     t_new = t_new + tau
                     st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1,
                                KP[0], fel)
@@ -377,7 +380,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                                 dummyP[q, c] = P_new[q, c]
                     st = var_time_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var,
                                        sysa, xc, xp, xtab, f1, s_new, P_new, KS, KP, KT, ytmp,
-                                       Ptmp, fel, err_w, ft, SR, SR_TN)
+                                       Ptmp, fel, err_w, ft, SR, row_tn)
                     t_new = t_new + tau
                     st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1,
                                KP[0], fel)
@@ -452,7 +455,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                 # per call, and every step of this loop, free flight too, cost ~20 % more)
                 st, t_dum = rk_step_sens(meth, phase, 0.0, h, 0.0, pe, s, t, P, dvm, disc, sysa,
                                          xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel,
-                                         ft, err_w, SR, SR_T)
+                                         ft, err_w, SR, row_t)
             elif not want_var and meth != RK2:
                 # without variational equations: straight to the unrolled RK4/DP5 step (what
                 # rk_step would call), one call level less per step
@@ -546,7 +549,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                         SR[SR_T, c] = 0.0
                 st = var_time_step(meth, t, tau_ev, s, P, dvm, disc, want_var, sysa, xc, xp, xtab,
                                    f0, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel, err_w, ft, SR,
-                                   SR_T)
+                                   row_t)
                 sens_step = True
                 if st != 0:
                     status = st

@@ -428,7 +428,7 @@ def step_length_derivative(meth, t, h, s, disc, sysa, xc, xp, xtab, s_tmp, KS, K
         W1[3, q, 0] = 0.0
     st, tn = rk_step_sens(meth, np.int64(0), 0.0, h, 0.0, np.int64(-1), s, t, W1[0, :n],
                           W1[3, :ne], disc, sysa, xc, xp, xtab, s_tmp, W1[1, :n], KS, KP1, KT,
-                          ytmp, W1[2, :n], fel, ft, err_w, SR1, SR_T)
+                          ytmp, W1[2, :n], fel, ft, err_w, SR1, np.int64(SR_T))
     for q in range(n):
         Bv[q] = W1[1, q, 0]
     return st
