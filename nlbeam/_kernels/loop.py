@@ -50,7 +50,7 @@ def integrate_kernel(system, xc, xp, xtab, settings, start, outputs):
     """Integrate from t0 to t_end (``integrate_var`` when the settings ask for the variational
     equations, else ``integrate_plain``; a Python function: each of the two compiled kernels
     compiles, or loads from the disk cache, only when first called: a process that never asks
-    for a monodromy never compiles the variational loop, the larger part of the compile time).
+    for a monodromy never compiles the variational loop, 28 of the 103 s CPU of both).
     ``system``, ``settings``, ``start`` and ``outputs`` are the fields of SystemArrays,
     Settings, Start and Outputs (bundles.py), (xc, xp, xtab) the excitation. Returns the
     status."""
