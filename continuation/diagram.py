@@ -984,6 +984,7 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
                     max_points=max_points, tol=tol, bif_tol=bif_tol)
     t0 = time.perf_counter()
     pool = Pool(workers, scheduler)
+    _kernels_before_workers(model, pool, stability)
     early = None
     if not pool.serial and not (isinstance(accuracy, str) and accuracy == "off"):
         from .accuracy import Early
@@ -1015,6 +1016,19 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
         if early is not None:
             early.close()
         pool.close()
+
+
+def _kernels_before_workers(model, pool, variational):
+    """The integration kernels compiled (or loaded from numba's disk cache) here before the
+    pool forks its workers, which inherit them: otherwise every worker compiles the plain
+    kernel at once on a fresh machine (each of its step functions too)."""
+    if pool.serial:
+        return
+    from nlbeam.integrate import compile_kernels
+
+    compile_kernels(model, False)
+    if variational:
+        compile_kernels(model, True)
 
 
 def continue_parameter(solution, parameter, p_range, *, model, segments=1, integrator=None,

@@ -11,13 +11,13 @@ import numpy as np
 from . import _kernels as _k
 from ._validate import (ArgumentTypeError, check_count, check_memory, finite, flag, integer,
                         positive, real_array)
-from .excitation import Excitation
+from .excitation import Excitation, Harmonic
 from .solver import (METHODS, MIN_STEPS_PER_CONTACT, Solver, warn_few_contact_steps,
                      warn_stiffened)
 from .summary import Summary
 
 __all__ = ["integrate", "flow", "FlowMap", "Trajectory", "Flow", "IntegrationError",
-           "default_dt", "METHODS", "MIN_STEPS_PER_CONTACT"]
+           "default_dt", "METHODS", "MIN_STEPS_PER_CONTACT", "compile_kernels"]
 
 
 class IntegrationError(RuntimeError):
@@ -219,7 +219,8 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
     fcounters = np.zeros(2)
     ev_log = np.zeros((int(event_log), 4))
     h_init = min(dt, Solver.first_step_cap(excitation))
-    status = model.kernels().integrate_kernel(
+    k = model.kernels()
+    status = (k.integrate_var if want_var else k.integrate_plain)(
         tuple(sysa), xc, xp, xtab,
         _k.settings(meth=METHODS[method], t0=t0, t_end=t_end, dt=dt, spc=spc, rtol=rtol,
                     atol=atol, h_init=h_init, max_steps=max_steps, events_on=events,
@@ -362,7 +363,7 @@ class FlowMap:
         self.meth = solver.code
         self.sysa = tuple(model.kernel_arrays())  # a plain tuple: see _kernels.bundles
         self.xc, self.xp, self.xtab = excitation.kernel_args()
-        self.kernel = model.kernels().integrate_kernel
+        self._kernels(model)
         self.span = (lo, hi)
         self.rtol, self.atol = float(rtol), float(atol)
         self.events, self.graded = bool(events), bool(graded)
@@ -379,16 +380,23 @@ class FlowMap:
         self._ev_log = np.zeros((0, 4))
         self._dt_checked = self.dt
 
+    def _kernels(self, model):
+        # two dispatchers: a map that never asks for a monodromy never compiles (or loads) the
+        # variational one
+        k = model.kernels()
+        self.kernel_plain, self.kernel_var = k.integrate_plain, k.integrate_var
+
     def __getstate__(self):
-        # the compiled kernel is not pickled: a rebuilt numba dispatcher would compile again
-        # (minutes) in the process that unpickles it; it is looked up there instead
+        # the compiled kernels are not pickled: a rebuilt numba dispatcher would compile again
+        # (minutes) in the process that unpickles it; they are looked up there instead
         state = self.__dict__.copy()
-        state.pop("kernel", None)
+        state.pop("kernel_plain", None)
+        state.pop("kernel_var", None)
         return state
 
     def __setstate__(self, state):
         self.__dict__.update(state)
-        self.kernel = self.model.kernels().integrate_kernel
+        self._kernels(self.model)
 
     def retarget(self, excitation):
         """This map for another excitation (same model, method, dt, tolerances): only the
@@ -447,7 +455,7 @@ class FlowMap:
         xmax = np.zeros(N)
         c = np.zeros(8, dtype=np.int64)
         fc = np.zeros(2)
-        status = self.kernel(
+        status = (self.kernel_var if monodromy else self.kernel_plain)(
             self.sysa, self.xc, self.xp, self.xtab,
             _k.settings(meth=self.meth, t0=t0, t_end=t_end, dt=dt, spc=self.spc, rtol=self.rtol,
                         atol=self.atol, h_init=min(dt, self.h_init_cap), max_steps=max_steps,
@@ -463,3 +471,19 @@ class FlowMap:
             self.solver.warn_few_contact_steps(c[5], c[6], self._stacklevel)
         return _flow_result(s_end, disc_end, P_end, dvm_end, xmax, c, N, in_contact,
                             monodromy)
+
+
+def compile_kernels(model, monodromy=False):
+    """Compile, or load from numba's disk cache, the integration kernel that ``model``'s flows
+    without (``monodromy=False``: integrate, records) or with the variational equations
+    (``monodromy=True``: shooting, diagrams) run, by one step at rest in this process. The
+    arguments have the types of every integrate, flow and FlowMap call, so the kernel is not
+    compiled again for them. Returns the CPU seconds it took (minutes on a fresh machine for
+    the variational kernel, well under a second once cached)."""
+    import time
+
+    t = time.process_time()
+    N = model.n_dof
+    fm = FlowMap(model, Harmonic(0.0, 1.0), warn=False)
+    fm(np.zeros(2 * N), 0.0, fm.dt, monodromy=bool(monodromy))
+    return time.process_time() - t

@@ -833,5 +833,9 @@ def ensemble(model, make_excitation, seeds, duration, *, workers=None, scheduler
     elif scheduler is None and workers is None:
         workers = min(len(seeds), os.cpu_count() or 1)
     with Pool(workers, scheduler) as pool:
+        if not pool.serial and scheduler is None:  # compiled (or loaded) once, here: the
+            from nlbeam.integrate import compile_kernels  # forked workers inherit it
+
+            compile_kernels(model, False)
         members = pool.map(_member, jobs)
     return EnsembleResult(seeds=seeds, members=members)

@@ -30,7 +30,7 @@ from .events import delta_after, delta_extremum, hermite5, locate, step_extrema
 from .excite import excitation_many, excite, excite_yyd
 from .field import deriv, deriv_plain, deriv_var, element_force, has_event, kinematics
 from .graded import rk_step_graded
-from .loop import integrate_kernel
+from .loop import integrate_kernel, integrate_plain, integrate_var
 from .steps import rk_step, tableau
 
 __all__ = [
@@ -41,5 +41,6 @@ __all__ = [
     "PWL_STOP", "RK2", "RK4", "VMINUS_FLOOR", "contact_rate", "contact_step", "delta_after",
     "delta_extremum", "hermite5", "locate", "step_extrema", "excitation_many", "excite",
     "excite_yyd", "deriv", "deriv_plain", "deriv_var", "element_force", "has_event", "kinematics",
-    "rk_step_graded", "integrate_kernel", "rk_step", "tableau",
+    "rk_step_graded", "integrate_kernel", "integrate_plain", "integrate_var", "rk_step",
+    "tableau",
 ]

@@ -43,11 +43,39 @@ def _store(n_stored, t, s, disc, xc, xp, xtab, sysa, out_t, out_s, out_d, out_f)
     return n_stored + 1
 
 
-@njit(cache=True, _nrt=True)
+_WANT_VAR = Settings._fields.index("want_var")
+
+
 def integrate_kernel(system, xc, xp, xtab, settings, start, outputs):
-    """Integrate from t0 to t_end: ``system``, ``settings``, ``start`` and ``outputs`` are the
-    fields of SystemArrays, Settings, Start and Outputs (bundles.py), (xc, xp, xtab) the
-    excitation. Returns the status.
+    """Integrate from t0 to t_end (``integrate_var`` when the settings ask for the variational
+    equations, else ``integrate_plain``; a Python function: each of the two compiled kernels
+    compiles, or loads from the disk cache, only when first called: a process that never asks
+    for a monodromy never compiles the variational loop, 28 of the 103 s CPU of both).
+    ``system``, ``settings``, ``start`` and ``outputs`` are the fields of SystemArrays,
+    Settings, Start and Outputs (bundles.py), (xc, xp, xtab) the excitation. Returns the
+    status."""
+    kernel = integrate_var if settings[_WANT_VAR] else integrate_plain
+    return kernel(system, xc, xp, xtab, settings, start, outputs)
+
+
+@njit(cache=True, _nrt=True)
+def integrate_plain(system, xc, xp, xtab, settings, start, outputs):
+    """integrate_kernel without the variational equations (the settings' want_var is not
+    read)."""
+    return _integrate(system, xc, xp, xtab, settings, start, outputs, False)
+
+
+@njit(cache=True, _nrt=True)
+def integrate_var(system, xc, xp, xtab, settings, start, outputs):
+    """integrate_kernel with the variational equations (the settings' want_var is not read)."""
+    return _integrate(system, xc, xp, xtab, settings, start, outputs, True)
+
+
+@njit(cache=True, _nrt=True, inline="always")
+def _integrate(system, xc, xp, xtab, settings, start, outputs, want_var):
+    """The integration from t0 to t_end, ``want_var`` a literal (integrate_plain,
+    integrate_var): the work arrays are allocated here, then ``_integrate_loop`` runs. Inlined
+    (a dispatcher level of its own around the loop cost 5-13 s CPU more to compile).
 
     Fixed-step methods (RK2, RK4) step on the grid t0 + k dt in free flight; inside a contact
     they take steps of (estimated contact duration) / spc, starting from the onset and ignoring
@@ -100,9 +128,7 @@ def integrate_kernel(system, xc, xp, xtab, settings, start, outputs):
                 KP1=np.zeros((ns, n, 1)), SR1=np.zeros((SR_ROWS, 1)), Bv=np.zeros(n))
     # want_var as a compile-time constant: the loop without the variational equations is
     # compiled without their code (numba prunes the branches on a literal argument)
-    if cfg.want_var:
-        return _integrate_loop(sysa, xc, xp, xtab, cfg, Outputs(*outputs), work, True)
-    return _integrate_loop(sysa, xc, xp, xtab, cfg, Outputs(*outputs), work, False)
+    return _integrate_loop(sysa, xc, xp, xtab, cfg, Outputs(*outputs), work, want_var)
 
 
 @njit(cache=True)
@@ -178,8 +204,12 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
     h = h_init
     status = 0
     en = 1.0
-    phase = 0       # 0: time steps; 1: onset, steps in sigma; 2: exit, steps in u
-    pe = -1         # the element of the graded phase
+    # (typed int64 from the start: numba's first typing pass would otherwise see the literals
+    # 0 and -1 and compile a dead copy of every step function for them, ~1/4 of the compile)
+    phase = np.int64(0)  # 0: time steps; 1: onset, steps in sigma; 2: exit, steps in u
+    pe = np.int64(-1)    # the element of the graded phase
+    row_t = np.int64(SR_T)    # the rows of SR a sensitive step writes (int64 as well: one
+    row_tn = np.int64(SR_TN)  # compiled copy of rk_step_sens and var_time_step for both)
     g_t0 = 0.0
     g_u = 0.0
     g_end = 0.0
@@ -249,7 +279,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                         SR[SR_H, c] = SR[SR_GEND, c] - SR[SR_U0, c]
                 st, t_new = rk_step_sens(meth, phase, g_u, hs, g_t0, pe, s, t, P, dvm, disc,
                                          sysa, xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp,
-                                         Ptmp, fel, ft, err_w, SR, SR_T)
+                                         Ptmp, fel, ft, err_w, SR, row_t)
                 sens_step = True
             else:
                 st, t_new = rk_step_graded(meth, 1, g_u, hs, g_t0, pe, s, t, P, dvm, disc, False,
@@ -292,7 +322,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                     SR[SR_H, c] = -SR[SR_U0, c] if hu == g_u else -SR[SR_GH, c]
                 st, t_new = rk_step_sens(meth, phase, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, sysa,
                                          xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel,
-                                         ft, err_w, SR, SR_T)
+                                         ft, err_w, SR, row_t)
                 sens_step = True
             else:
                 st, t_new = rk_step_graded(meth, 2, g_u, -hu, 0.0, pe, s, t, P, dvm, disc, False,
@@ -334,7 +364,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                                 dummyP[q, c] = P_new[q, c]
                     st = var_time_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var,
                                        sysa, xc, xp, xtab, f1, s_new, P_new, KS, KP, KT, ytmp,
-                                       Ptmp, fel, err_w, ft, SR, SR_TN)
+                                       Ptmp, fel, err_w, ft, SR, row_tn)
                     t_new = t_new + tau
                     st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1,
                                KP[0], fel)
@@ -350,7 +380,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                                 dummyP[q, c] = P_new[q, c]
                     st = var_time_step(meth, t_new, tau, s_try, dummyP, dvm, disc, want_var,
                                        sysa, xc, xp, xtab, f1, s_new, P_new, KS, KP, KT, ytmp,
-                                       Ptmp, fel, err_w, ft, SR, SR_TN)
+                                       Ptmp, fel, err_w, ft, SR, row_tn)
                     t_new = t_new + tau
                     st = deriv(t_new, s_new, P_new, dvm, disc, False, sysa, xc, xp, xtab, f1,
                                KP[0], fel)
@@ -425,7 +455,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                 # per call, and every step of this loop, free flight too, cost ~20 % more)
                 st, t_dum = rk_step_sens(meth, phase, 0.0, h, 0.0, pe, s, t, P, dvm, disc, sysa,
                                          xc, xp, xtab, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel,
-                                         ft, err_w, SR, SR_T)
+                                         ft, err_w, SR, row_t)
             elif not want_var and meth != RK2:
                 # without variational equations: straight to the unrolled RK4/DP5 step (what
                 # rk_step would call), one call level less per step
@@ -519,7 +549,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                         SR[SR_T, c] = 0.0
                 st = var_time_step(meth, t, tau_ev, s, P, dvm, disc, want_var, sysa, xc, xp, xtab,
                                    f0, s_new, P_new, KS, KP, KT, ytmp, Ptmp, fel, err_w, ft, SR,
-                                   SR_T)
+                                   row_t)
                 sens_step = True
                 if st != 0:
                     status = st

@@ -11,6 +11,8 @@ sizes (``events_sens.py`` sets them at an onset).
 """
 import math
 
+import numpy as np
+
 from .codes import (_R3, _R6, _RA21, _RA31, _RA32, _RA41, _RA42, _RA43, _RC1, _RC2, _RC3,
                     _RC4, DP5, ERR_EVENT, ERR_NONFINITE, RK4)
 from .excite import excite
@@ -399,9 +401,10 @@ def var_time_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
             if SR[row_t, c] != 0.0 or SR[SR_H, c] != 0.0:
                 fixed_ends = False
         if not fixed_ends:
-            st, tn = rk_step_sens(meth, 0, 0.0, h, 0.0, -1, s, t, P, dvm, disc, sysa, xc, xp,
-                                  xtab, s_out, P_out, KS, KP, KT, ytmp, Ptmp, fel, ft, err_w, SR,
-                                  row_t)
+            # (phase and element as int64, not literals: the loop's own copy of rk_step_sens)
+            st, tn = rk_step_sens(meth, np.int64(0), 0.0, h, 0.0, np.int64(-1), s, t, P, dvm,
+                                  disc, sysa, xc, xp, xtab, s_out, P_out, KS, KP, KT, ytmp, Ptmp,
+                                  fel, ft, err_w, SR, row_t)
             return st
         for c in range(m):
             SR[SR_TN, c] = 0.0
@@ -423,9 +426,9 @@ def step_length_derivative(meth, t, h, s, disc, sysa, xc, xp, xtab, s_tmp, KS, K
     for q in range(W1.shape[1]):
         W1[0, q, 0] = 0.0
         W1[3, q, 0] = 0.0
-    st, tn = rk_step_sens(meth, 0, 0.0, h, 0.0, -1, s, t, W1[0, :n], W1[3, :ne], disc, sysa, xc,
-                          xp, xtab, s_tmp, W1[1, :n], KS, KP1, KT, ytmp, W1[2, :n], fel, ft,
-                          err_w, SR1, SR_T)
+    st, tn = rk_step_sens(meth, np.int64(0), 0.0, h, 0.0, np.int64(-1), s, t, W1[0, :n],
+                          W1[3, :ne], disc, sysa, xc, xp, xtab, s_tmp, W1[1, :n], KS, KP1, KT,
+                          ytmp, W1[2, :n], fel, ft, err_w, SR1, np.int64(SR_T))
     for q in range(n):
         Bv[q] = W1[1, q, 0]
     return st

@@ -137,7 +137,7 @@ def test_a_worker_process_loads_the_custom_force_kernels_from_the_disk_cache(tmp
         fl = nlbeam.flow(custom, nlbeam.Harmonic(0.2, 0.15), [0.3, 0.0], 0.0, 1.0,
                          monodromy=True, dt=0.01)
         k = custom.kernels()
-        stats = k.integrate_kernel.stats
+        stats = k.integrate_var.stats
         print(json.dumps([k.__name__, sum(stats.cache_hits.values()),
                           sum(stats.cache_misses.values()), fl.state.tolist(),
                           fl.monodromy.tolist()]))

@@ -17,6 +17,7 @@ import stochastic
 from ..files import remove_stale_temporaries, write_text_atomic
 from ..progress import Progress
 from ..sweeps import run_jobs
+from ..warmup import prepare_kernels
 from .outputs import write_outputs
 from .plan import CACHE_DIR, entry_record, plan
 from .schema import Scene, build_model, build_noise, load_scene
@@ -254,6 +255,8 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
     parallel = scheduler is not None or (
         scene.sweep is not None and len(todo) > 1 and min(w or os.cpu_count() or 1,
                                                           len(todo)) > 1)
+    if parallel and scheduler is None:  # the kernels here, before the pool forks its workers
+        prepare_kernels([j.inputs for j in todo])
     if parallel:
         outs = _run_parallel(todo, w, scheduler, show, quiet, name_of)
         for j, (r, warned) in zip(todo, outs):

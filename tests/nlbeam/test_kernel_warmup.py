@@ -1,0 +1,130 @@
+"""The integration kernels are compiled once per machine and loaded everywhere else: one
+signature per kernel whatever the model and excitation, the variational kernel never touched
+by a run without monodromies, and pool workers forked after nlbeam.app.warmup.prepare_kernels
+compiling nothing. Counted in fresh processes (numba's per-dispatcher cache hits and
+misses), not timed."""
+import json
+import subprocess
+import sys
+import textwrap
+
+import nlbeam
+from nlbeam.integrate import compile_kernels
+
+_REPORT = """
+import json
+import numba
+import nlbeam._kernels as K
+import stochastic._kernels as S
+
+def report():
+    out = {}
+    for mod in (K.loop, K.excite, K.field, S):
+        for name, d in vars(mod).items():
+            if isinstance(d, numba.core.registry.CPUDispatcher) and d.py_func.__module__ == \\
+                    mod.__name__:
+                st = d.stats
+                out[name] = [len(d.signatures), sum(st.cache_hits.values()),
+                             sum(st.cache_misses.values())]
+    return out
+"""
+
+
+def _run(code):
+    """The JSON printed last by ``code`` run in a fresh interpreter."""
+    out = subprocess.run([sys.executable, "-c", _REPORT + textwrap.dedent(code)],
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-3000:]
+    return json.loads(out.stdout.splitlines()[-1])
+
+
+def _cached():
+    # both kernels in numba's disk cache (compiled here if this is the first use)
+    compile_kernels(nlbeam.BeamImpact.paper(), False)
+    compile_kernels(nlbeam.BeamImpact.paper(), True)
+
+
+def test_records_never_load_the_variational_kernel():
+    _cached()
+    got = _run("""
+        import nlbeam, stochastic
+        m = nlbeam.ModalBeam.paper(n_modes=2)
+        nlbeam.integrate(m, nlbeam.Harmonic(1e-4, 30.0), 0.05)
+        nlbeam.flow(nlbeam.BeamImpact.paper(), nlbeam.CosineSum([20.0], [1e-4], [0.0]),
+                    [0.0, 0.0], 0.0, 0.05)
+        stochastic.simulate(m, stochastic.BandLimitedNoise((0.0, 100.0), rms=1e-4, seed=1),
+                            0.5, 0.1, method="rk4", psd_resolution=4.0)
+        print(json.dumps(report()))
+    """)
+    assert got["integrate_plain"] == [1, 1, 0]   # one signature, loaded, not compiled
+    assert got["integrate_var"] == [0, 0, 0]     # never loaded
+
+
+def test_workers_forked_after_prepare_kernels_compile_nothing():
+    _cached()
+    got = _run("""
+        import os
+        from nlbeam.app.warmup import prepare_kernels
+        from nlbeam.pool import Pool
+        import nlbeam
+        paper = {"name": "BeamImpact"}
+        records = [{"analysis": "stochastic", "model": paper}] * 2
+        n_records = prepare_kernels(records)
+        after_records = report()
+        n_all = prepare_kernels(records + [{"analysis": "periodic", "model": paper,
+                                           "periodic": {"stability": True}}])
+        after = report()
+
+        def in_worker(_):
+            f = nlbeam.flow(nlbeam.ModalBeam.paper(n_modes=3), nlbeam.Harmonic(1e-4, 30.0),
+                            [0.0] * 6, 0.0, 0.02, monodromy=True)
+            k = nlbeam.BeamImpact.paper().kernels()
+            return [os.getpid(), sum(k.integrate_var.stats.cache_misses.values()),
+                    sum(k.integrate_var.stats.cache_hits.values()), f.monodromy.shape[0]]
+
+        with Pool(2) as pool:
+            workers = pool.map(in_worker, [0, 1, 2, 3])
+        print(json.dumps([n_records, after_records, n_all, after, workers, os.getpid()]))
+    """)
+    n_records, after_records, n_all, after, workers, pid = got
+    assert n_records == 1 and after_records["integrate_plain"] == [1, 1, 0]
+    assert after_records["integrate_var"] == [0, 0, 0]   # records need no monodromy
+    assert n_all == 2 and after["integrate_var"] == [1, 1, 0]   # loaded, not compiled
+    assert {w[0] for w in workers} - {pid}               # workers are other processes ...
+    # ... that inherited the kernel with its counts: neither compiled nor loaded it again
+    assert all(w[1:] == [0, 1, 6] for w in workers)
+
+
+def test_a_scene_leaves_one_signature_per_kernel(tmp_path):
+    _cached()
+    scene = tmp_path / "scene.toml"
+    scene.write_text(textwrap.dedent("""
+        title = "one signature"
+        [periodic]
+        amplitude = 1e-4
+        f_range = [42.0, 45.0]
+        orders = [1]
+        n_grid = 3
+        [stochastic]
+        band = [0.0, 100.0]
+        rms = 1e-4
+        seed = 1
+        duration = 1.5
+        transient = 0.1
+        psd_resolution = 2.0
+        [[figure]]
+        kind = "frc"
+        file = "frc.png"
+        [[figure]]
+        kind = "psd"
+        file = "psd.png"
+    """))
+    got = _run(f"""
+        from nlbeam.scenes import run_scene
+        run_scene({str(scene)!r}, {str(tmp_path / "out")!r}, quiet=True, workers=1)
+        print(json.dumps(report()))
+    """)
+    assert got["integrate_plain"][0] == 1 and got["integrate_var"][0] == 1
+    assert got["integrate_plain"][2] == 0 and got["integrate_var"][2] == 0  # none compiled
+    several = {name: v for name, v in got.items() if v[0] > 1}
+    assert not several, f"kernels compiled for more than one argument type: {several}"
