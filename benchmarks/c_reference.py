@@ -10,7 +10,10 @@ the 1e-10 Hermite grid):
   in contact : the stop preloaded (gap -1 mm), a 1e-7 m rms base motion, 0.2 s, the C step
                set to nlbeam's mean step so both take the same steps.
 nlbeam is also timed with graded=True, with every sample stored (store_every=1) and with
-events=False, which splits its cost into bookkeeping, storing and event checks.
+events=False, which splits its cost into bookkeeping, storing and event checks; each of these
+with the lean loop for routine steps (nlbeam/_kernels/routine.py, the default) and with the
+general loop alone (nlbeam.integrate.ROUTINE_STEPS = False), all variants timed in turn
+(alternating rounds, best of 5), and their trajectories compared bit for bit.
 Skipped with a message when no C compiler is found.
 Run: python benchmarks/c_reference.py
 """
@@ -20,10 +23,14 @@ import subprocess
 import tempfile
 import time
 
+import importlib
+
 import numpy as np
 
 import nlbeam
 import stochastic as st
+
+integ = importlib.import_module("nlbeam.integrate")
 
 M, K_SPRING, B = 37.75e-3, 736.3, 0.16
 K_HERTZ, E = 2.1e8, 0.5
@@ -60,13 +67,24 @@ def run_c(exe, table, t_end, dt, dt_c, gap, x0, v0, v_imp0, repeats=5):
     return int(ns), int(ne), float(xe), float(cpu)
 
 
-def best_of(fn, repeat=5):
-    best, out = np.inf, None
+def best_of_alternating(fns, repeat=5):
+    """Best CPU time of each of fns, timed in turn (one call of each per round), and its last
+    result: the variants see the same load."""
+    best, outs = [np.inf] * len(fns), [None] * len(fns)
     for _ in range(repeat):
-        t = time.process_time()
-        out = fn()
-        best = min(best, time.process_time() - t)
-    return best, out
+        for i, fn in enumerate(fns):
+            t = time.process_time()
+            outs[i] = fn()
+            best[i] = min(best[i], time.process_time() - t)
+    return best, outs
+
+
+def _run_nlbeam(model, tab, t_end, dt, x0, routine, kw):
+    integ.ROUTINE_STEPS = routine
+    try:
+        return nlbeam.integrate(model, tab, t_end, method="rk4", dt=dt, x0=[x0, 0.0], **kw)
+    finally:
+        integ.ROUTINE_STEPS = True
 
 
 def case(name, exe, workdir, gap, rms, t_end, dt, x0):
@@ -78,26 +96,30 @@ def case(name, exe, workdir, gap, rms, t_end, dt, x0):
     path = os.path.join(workdir, f"{name}.bin")
     write_table(tab, path)
     model = system(gap)
-    rows = []
     variants = (("rk4 graded=False", dict(graded=False, store_every=0)),
                 ("rk4 graded=True", dict(graded=True, store_every=0)),
                 ("rk4 graded=False store_every=1", dict(graded=False, store_every=1)),
                 ("rk4 graded=False events=False", dict(graded=False, store_every=0,
                                                        events=False)))
     nlbeam.integrate(model, tab, 0.01, method="rk4", dt=dt, x0=[x0, 0.0])  # compile
-    ref = None
-    for label, kw in variants:
-        cpu, tr = best_of(lambda: nlbeam.integrate(model, tab, t_end, method="rk4", dt=dt,
-                                                   x0=[x0, 0.0], **kw))
-        rows.append((label, cpu / tr.n_steps * 1e9, tr.n_steps, tr.state_end[0]))
-        if ref is None:
-            ref = tr
+    runs = [(f"{label}{'' if routine else ' general loop'}", routine, kw)
+            for label, kw in variants for routine in (True, False)]
+    cpus, trs = best_of_alternating([
+        (lambda routine=routine, kw=kw: _run_nlbeam(model, tab, t_end, dt, x0, routine, kw))
+        for label, routine, kw in runs])
+    rows = [(label, cpu / tr.n_steps * 1e9, tr.n_steps, tr.state_end[0])
+            for (label, routine, kw), cpu, tr in zip(runs, cpus, trs)]
+    for (label, _, _), fast, general in zip(runs[::2], trs[::2], trs[1::2]):
+        if not all(np.array_equal(getattr(fast, k), getattr(general, k))
+                   for k in ("t", "x", "v", "state_end", "xmax", "events")):
+            print(f"  ({label}: the routine loop's trajectory differs from the general loop's)")
+    ref = trs[0]
     dt_c = t_end / ref.n_steps if gap < 0 else dt / 8
     ns, ne, xe, cpu = run_c(exe, path, t_end, dt, dt_c, gap, x0, 0.0, 1e-3)
     c_ns = cpu / ns * 1e9
     print(f"{name}: C {c_ns:.1f} ns/step ({ns} steps, {ne} events, x_end {xe:.12g} m)")
     for label, nsps, n, xend in rows:
-        print(f"  nlbeam {label:32s} {nsps:7.1f} ns/step  {nsps / c_ns:5.1f} x C  "
+        print(f"  nlbeam {label:45s} {nsps:7.1f} ns/step  {nsps / c_ns:5.1f} x C  "
               f"({n} steps, x_end {xend:.12g} m)")
 
 

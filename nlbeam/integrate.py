@@ -19,6 +19,11 @@ from .summary import Summary
 __all__ = ["integrate", "flow", "FlowMap", "Trajectory", "Flow", "IntegrationError",
            "default_dt", "METHODS", "MIN_STEPS_PER_CONTACT", "compile_kernels"]
 
+# RK4 steps where nothing happens run in the kernels' lean loop (nlbeam/_kernels/routine.py),
+# with the same results bit for bit; tests and benchmarks set this False to time and compare
+# the general loop alone
+ROUTINE_STEPS = True
+
 
 class IntegrationError(RuntimeError):
     """The integrator could not complete; the message says what to change."""
@@ -215,7 +220,7 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
     P_end = np.empty_like(P0)
     dvm_end = np.empty_like(dvm0)
     xmax = np.zeros(N)
-    counters = np.zeros(8, dtype=np.int64)
+    counters = np.zeros(9, dtype=np.int64)
     fcounters = np.zeros(2)
     ev_log = np.zeros((int(event_log), 4))
     h_init = min(dt, Solver.first_step_cap(excitation))
@@ -225,7 +230,7 @@ def _run(model, excitation, t0, t_end, method, dt, spc, rtol, atol, max_steps, s
         _k.settings(meth=METHODS[method], t0=t0, t_end=t_end, dt=dt, spc=spc, rtol=rtol,
                     atol=atol, h_init=h_init, max_steps=max_steps, events_on=events,
                     want_var=want_var, track_xmax=track_xmax, store_every=store_every,
-                    graded=graded),
+                    graded=graded, routine=ROUTINE_STEPS),
         _k.start(s0=s0, disc0=disc, P0=P0, dvm0=dvm0),
         _k.outputs(t=out_t, s=out_s, delta=out_d, force=out_f, ev_log=ev_log, s_end=s_end,
                    disc_end=disc_end, P_end=P_end, dvm_end=dvm_end, xmax=xmax,
@@ -453,14 +458,14 @@ class FlowMap:
         P_end = np.empty_like(P0)
         dvm_end = np.empty_like(dvm0)
         xmax = np.zeros(N)
-        c = np.zeros(8, dtype=np.int64)
+        c = np.zeros(9, dtype=np.int64)
         fc = np.zeros(2)
         status = (self.kernel_var if monodromy else self.kernel_plain)(
             self.sysa, self.xc, self.xp, self.xtab,
             _k.settings(meth=self.meth, t0=t0, t_end=t_end, dt=dt, spc=self.spc, rtol=self.rtol,
                         atol=self.atol, h_init=min(dt, self.h_init_cap), max_steps=max_steps,
                         events_on=self.events, want_var=monodromy, track_xmax=True,
-                        store_every=0, graded=self.graded),
+                        store_every=0, graded=self.graded, routine=ROUTINE_STEPS),
             _k.start(s0=s0, disc0=disc, P0=P0, dvm0=dvm0),
             _k.outputs(t=self._empty1, s=self._empty2, delta=self._empty_e, force=self._empty_e,
                        ev_log=self._ev_log, s_end=s_end, disc_end=disc_end, P_end=P_end,

@@ -42,6 +42,7 @@ Settings = namedtuple("Settings", [
     "track_xmax",   # bool: max |x_i| over the run into Outputs.xmax
     "store_every",  # int: keep every k-th grid sample (0: none)
     "graded",       # bool: graded steps at the ends of a contact
+    "routine",      # bool: routine RK4 steps in the lean loop (routine.py; the same results)
 ])
 
 Start = namedtuple("Start", [
@@ -62,8 +63,8 @@ Outputs = namedtuple("Outputs", [
     "P_end",      # (2N, m) sensitivities at the end
     "dvm_end",    # (ne, m) sensitivities of delta'_minus at the end
     "xmax",       # (N,) max |x_i| over the run (updated in place)
-    "counters",   # (8,) int64 [n_stored, n_steps, n_rejected, n_rhs, n_impacts,
-                  #   min_steps_per_contact, n_contacts, n_events]
+    "counters",   # (8,) or (9,) int64 [n_stored, n_steps, n_rejected, n_rhs, n_impacts,
+                  #   min_steps_per_contact, n_contacts, n_events(, steps by routine.py)]
     "fcounters",  # (2,) [t reached, max |delta| at a landed event]
 ])
 
@@ -90,12 +91,12 @@ Work.__doc__ = "Work arrays of the integration loop, allocated by ``integrate_ke
 
 
 def settings(*, meth, t0, t_end, dt, spc, rtol, atol, h_init, max_steps, events_on, want_var,
-             track_xmax, store_every, graded):
+             track_xmax, store_every, graded, routine=True):
     """The Settings fields as integrate_kernel takes them: a plain tuple, each value of the type
     the kernel is compiled for (an int where a float is due would compile a second version)."""
     return (int(meth), float(t0), float(t_end), float(dt), float(spc), float(rtol), float(atol),
             float(h_init), int(max_steps), bool(events_on), bool(want_var), bool(track_xmax),
-            int(store_every), bool(graded))
+            int(store_every), bool(graded), bool(routine))
 
 
 def start(*, s0, disc0, P0, dvm0):

@@ -4,7 +4,7 @@ import math
 
 from .codes import _T_C_HERTZ, PWL_STOP
 from .excite import excite
-from .field import element_force, element_rate_grad, kinematics
+from .field import element_force, element_rate_grad, kinematics, kinematics_inline
 from .hook import njit
 
 
@@ -52,13 +52,20 @@ def contact_step_sens(e, v0, a0, sysa, spc):
 def contact_rate(t, s, disc, sysa, xc, xp, xtab):
     """Largest rate (1/s) of the contact laws at (t, s): sqrt(stiffness / m_eff) and
     damping / m_eff of every element in contact; explicit steps need rate * h < 0.5."""
+    y, yd, ydd, st = excite(t, xc, xp, xtab)
+    return _contact_rate_at(y, yd, s, disc, sysa)
+
+
+@njit(cache=True, inline="always")
+def _contact_rate_at(y, yd, s, disc, sysa):
+    """``contact_rate`` with the excitation (y, y') at t given (the same expressions; y and
+    y' are the doubles ``excite`` returns for every excitation code): for routine.py."""
     etype = sysa.etype
     N = s.shape[0] // 2
-    y, yd, ydd, st = excite(t, xc, xp, xtab)
     lam = 0.0
     for e in range(etype.shape[0]):
         if disc[e, 0] != 0.0:
-            d, dd = kinematics(e, s, y, yd, sysa)
+            d, dd = kinematics_inline(e, s, y, yd, sysa)
             f, dfd, dfdd, dfdv = element_force(etype[e], sysa.epar[e], d, dd, disc[e, 1],
                                                disc[e, 0])
             winv = 0.0

@@ -153,11 +153,18 @@ def _may_cross(e, t, h, s, s_new, disc, sysa, xc, xp, xtab):
     element's own side, and no extremum of delta_e towards the boundary inside the step).
     The same expressions as ``_crossing`` and ``kinematics``, so the same decision bit for bit;
     it saves the call (~25 arrays) on the steps where nothing happens, nearly all of them."""
+    y0, yd0, st = excite_yyd(t, xc, xp, xtab)
+    y1, yd1, st = excite_yyd(t + h, xc, xp, xtab)
+    return _may_cross_at(e, y0, yd0, y1, yd1, s, s_new, disc, sysa)
+
+
+@njit(cache=True, inline="always")
+def _may_cross_at(e, y0, yd0, y1, yd1, s, s_new, disc, sysa):
+    """``_may_cross`` with the excitation (y, y') at the step's start and end given (the same
+    expressions): for callers that already evaluated it there (routine.py)."""
     sign = -1.0 if disc[e, 0] != 0.0 else 1.0
     ew = sysa.ew
     N = ew.shape[1]
-    y0, yd0, st = excite_yyd(t, xc, xp, xtab)
-    y1, yd1, st = excite_yyd(t + h, xc, xp, xtab)
     d1 = sysa.ewy[e] * y1 - sysa.egap[e]
     dd0 = sysa.ewy[e] * yd0
     dd1 = sysa.ewy[e] * yd1

@@ -50,6 +50,13 @@ def has_event(et):
 @njit(cache=True)
 def kinematics(e, s, y, yd, sysa):
     """(delta, delta') of element e."""
+    return kinematics_inline(e, s, y, yd, sysa)
+
+
+@njit(cache=True, inline="always")
+def kinematics_inline(e, s, y, yd, sysa):
+    """``kinematics`` inlined where it is called in every step (a call with the system's
+    arrays exploded into ~100 arguments costs more than the loop)."""
     ew = sysa.ew
     N = ew.shape[1]
     d = sysa.ewy[e] * y - sysa.egap[e]
@@ -125,6 +132,18 @@ def deriv_plain(t, s, P, dvm, disc, sysa, xc, xp, xtab, ks, kP, fel):
     arguments cost about 30 ns, half of a 1-DOF right-hand side."""
     if _HAS_USER:
         return deriv(t, s, P, dvm, disc, False, sysa, xc, xp, xtab, ks, kP, fel)
+    y, yd, st = excite_yyd(t, xc, xp, xtab)
+    if st != 0:
+        return st
+    _deriv_plain_at(y, yd, s, disc, sysa, ks, fel)
+    return 0
+
+
+@njit(cache=True, inline="always")
+def _deriv_plain_at(y, yd, s, disc, sysa, ks, fel):
+    """The body of ``deriv_plain`` with the excitation (y, y') given (the same operations in
+    the same order), so that callers that know it at a time evaluate it once (routine.py):
+    no custom-force hook (callers check _HAS_USER)."""
     MinvK = sysa.MinvK
     MinvC = sysa.MinvC
     mek = sysa.mek
@@ -134,9 +153,6 @@ def deriv_plain(t, s, P, dvm, disc, sysa, xc, xp, xtab, ks, kP, fel):
     mw = sysa.mw
     N = MinvK.shape[0]
     ne = etype.shape[0]
-    y, yd, st = excite_yyd(t, xc, xp, xtab)
-    if st != 0:
-        return st
     for i in range(N):
         ks[i] = s[N + i]
         acc = mek[i] * y + mec[i] * yd
@@ -144,14 +160,13 @@ def deriv_plain(t, s, P, dvm, disc, sysa, xc, xp, xtab, ks, kP, fel):
             acc -= MinvK[i, j] * s[j] + MinvC[i, j] * s[N + j]
         ks[N + i] = acc
     for e in range(ne):
-        d, dd = kinematics(e, s, y, yd, sysa)
+        d, dd = kinematics_inline(e, s, y, yd, sysa)
         f, dfd, dfdd, dfdv = element_force(etype[e], epar[e], d, dd, disc[e, 1], disc[e, 0])
         fel[e] = f
         if f == 0.0 and dfd == 0.0 and dfdd == 0.0:
             continue
         for i in range(N):
             ks[N + i] -= mw[e, i] * f
-    return 0
 
 
 @njit(cache=True, inline="always")

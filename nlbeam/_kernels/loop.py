@@ -7,40 +7,18 @@ import numpy as np
 from .bundles import Outputs, Settings, Start, SystemArrays, Work
 from .codes import DP5, ERR_MAX_STEPS, ERR_STEP_UNDERFLOW, PWL_STOP, RK2, RK4, VMINUS_FLOOR
 from .contact import contact_rate, contact_rate_sens, contact_step, contact_step_sens
-from .events import _crossing, _may_cross, delta_extremum, hermite5, locate, step_extrema
+from .events import _crossing, _may_cross, delta_extremum, locate
 from .events_sens import boundary_time_sens, dsw_sens, onset_sens
-from .excite import excite, excite_yyd
-from .field import deriv, deriv_plain, element_force, has_event, kinematics
+from .excite import excite
+from .field import deriv, deriv_plain, has_event, kinematics
 from .graded import rk_step_graded
 from .hook import _HAS_USER, njit
+from .routine import routine_steps
+from .samples import _store, grid_samples, track_xmax_step
 from .sens_steps import (SE_DSW, SE_DTC, SE_ROWS, SR_DSC, SR_GEND, SR_GH, SR_H, SR_ROWS, SR_T,
                          SR_TN, SR_TREF, SR_U0, rk_step_sens, step_length_derivative,
                          var_time_step)
 from .steps import _rk_step_plain, _rk_step_var, rk_step, tableau
-
-
-@njit(cache=True, inline="always")
-def _store(n_stored, t, s, disc, xc, xp, xtab, sysa, out_t, out_s, out_d, out_f):
-    """Write sample n_stored: t, s, and delta and force of every element. Inlined into the
-    integrator's loop, with y'' skipped and the penetration computed in place (the same
-    expressions as ``kinematics``): a call with the system's arrays cost ~100 ns a sample."""
-    y, yd, st = excite_yyd(t, xc, xp, xtab)
-    etype = sysa.etype
-    ew = sysa.ew
-    N = ew.shape[1]
-    out_t[n_stored] = t
-    for q in range(s.shape[0]):
-        out_s[n_stored, q] = s[q]
-    for e in range(etype.shape[0]):
-        d = sysa.ewy[e] * y - sysa.egap[e]
-        dd = sysa.ewy[e] * yd
-        for j in range(N):
-            d += ew[e, j] * s[j]
-            dd += ew[e, j] * s[N + j]
-        out_d[n_stored, e] = d
-        f, a1, a2, a3 = element_force(etype[e], sysa.epar[e], d, dd, disc[e, 1], disc[e, 0])
-        out_f[n_stored, e] = f
-    return n_stored + 1
 
 
 _WANT_VAR = Settings._fields.index("want_var")
@@ -216,6 +194,11 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
     g_h = 0.0
     t_dep = False   # with want_var: d t / d z (SR[SR_T]) may be nonzero
     sens_step = False
+    # routine RK4 steps go to the lean loop of routine.py (the same doubles); after a call
+    # that took no step, the general loop takes one before the next call
+    routine = cfg.routine and meth == RK4 and not _HAS_USER
+    skip_routine = False
+    n_routine = 0
 
     st = deriv(t, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0, KP[0], fel)
     n_rhs += 1
@@ -231,6 +214,22 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
         if n_steps >= max_steps:
             status = ERR_MAX_STEPS
             break
+        if not want_var and routine and phase == 0:
+            if skip_routine:
+                skip_routine = False
+            else:
+                t, k_grid, n_steps, n_stored, n_rhs, n_r = routine_steps(
+                    sysa, xc, xp, xtab, t0, t_end, dt, n_grid, max_steps, events_on, track_xmax,
+                    graded, store_every, t, k_grid, n_steps, n_stored, n_rhs, s, f0, s_new, f1,
+                    disc, dtc, d_sw, steps_in_contact, KS, ytmp, fel, xmax, out_t, out_s, out_d,
+                    out_f)
+                n_routine += n_r
+                skip_routine = n_r == 0
+                if not t < t_end:
+                    break
+                if n_steps >= max_steps:
+                    status = ERR_MAX_STEPS
+                    break
         n_in = 0
         for e in range(ne):
             if disc[e, 0] != 0.0:
@@ -576,24 +575,7 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
             if disc[e, 0] != 0.0:
                 steps_in_contact[e] += 1
         if track_xmax:
-            # the refinement on the dense output only where a velocity changes sign and the
-            # quintic can exceed the current max: |x(theta)| <= max(|x0|, |x1|) + h (|v0| + |v1|)
-            # max|H1| + h^2 (|a0| + |a1|) max|H2| (H0 + H3 = 1, both in [0, 1]; max|H4| = max|H1|
-            # = 16/81, max|H5| = max|H2| = 0.01728), so a skipped refinement could not have
-            # raised xmax: the same xmax bit for bit, without most of the bisections
-            refine = False
-            hh = t_new - t
-            for i in range(N):
-                a = abs(s_new[i])
-                if a > xmax[i]:
-                    xmax[i] = a
-                if s[N + i] * s_new[N + i] < 0.0:
-                    bnd = (max(abs(s[i]), a) + hh * 0.19754 * (abs(s[N + i]) + abs(s_new[N + i]))
-                           + hh * hh * 0.017281 * (abs(f0[N + i]) + abs(f1[N + i])))
-                    if bnd * (1.0 + 1e-12) >= xmax[i]:
-                        refine = True
-            if refine:
-                step_extrema(s, f0, s_new, f1, t_new - t, N, xmax)
+            track_xmax_step(s, f0, s_new, f1, t_new - t, N, xmax)
         if fixed and graded and n_in == 1 and disc[pe, 0] != 0.0 and t_new > t:
             # the maximum penetration of this contact sets where the graded exit phase starts
             y0, yd0, ydd0, st2 = excite(t, xc, xp, xtab)
@@ -608,28 +590,9 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
                              P_new, dvm, disc, SR, sysa, xc, xp, xtab, KS, KP, fel, ft,
                              SE[SE_DSW, pe])
         # grid samples passed by this step: exact at a grid hit, dense output otherwise
-        while k_grid < n_grid:
-            kk = k_grid + 1
-            tgk = t0 + kk * dt if kk < n_grid else t_end
-            exact = hit_grid and (kk == n_grid or tgk >= t_new - 1e-15 * abs(t_new))
-            if tgk > t_new and not exact:
-                break
-            k_grid = kk
-            if store_every > 0 and (kk % store_every == 0 or kk == n_grid):
-                if exact:
-                    n_stored = _store(n_stored, t_new, s_new, disc, xc, xp, xtab, sysa,
-                                      out_t, out_s, out_d, out_f)
-                else:
-                    th = (tgk - t) / (t_new - t)
-                    for i in range(N):
-                        xk, vk = hermite5(s[i], s[N + i], f0[N + i], s_new[i], s_new[N + i],
-                                          f1[N + i], t_new - t, th)
-                        ytmp[i] = xk
-                        ytmp[N + i] = vk
-                    n_stored = _store(n_stored, tgk, ytmp, disc, xc, xp, xtab, sysa,
-                                      out_t, out_s, out_d, out_f)
-            if exact:
-                break
+        k_grid, n_stored = grid_samples(k_grid, n_grid, n_stored, store_every, t0, dt, t_end, t,
+                                        t_new, hit_grid, s, f0, s_new, f1, ytmp, disc, xc, xp,
+                                        xtab, sysa, out_t, out_s, out_d, out_f)
         t = t_new
         for q in range(n):
             s[q] = s_new[q]
@@ -739,6 +702,8 @@ def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work, want_var):
     counters[5] = min_spc if n_contacts > 0 else -1
     counters[6] = n_contacts
     counters[7] = n_events
+    if counters.shape[0] > 8:
+        counters[8] = n_routine
     fcounters[0] = t
     fcounters[1] = max_land
     return status

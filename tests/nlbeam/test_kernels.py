@@ -47,7 +47,7 @@ def test_the_bundle_builders_follow_the_field_order():
         assert [k for k in names if getattr(cfg, k)] == [name]
     cfg = K.Settings(*K.settings(**dict.fromkeys(names, 1)))
     assert [type(v) for v in cfg] == [int, float, float, float, float, float, float, float, int,
-                                      bool, bool, bool, int, bool]
+                                      bool, bool, bool, int, bool, bool]
     for bundle, build in ((K.Start, K.start), (K.Outputs, K.outputs)):
         arrays = {name: np.zeros(1) for name in bundle._fields}
         got = bundle(*build(**arrays))
