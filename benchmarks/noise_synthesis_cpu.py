@@ -3,7 +3,10 @@ run with PYTHONPATH set to each checkout, alternating, to compare two versions s
 With --breakdown, also where simulate's CPU goes (cProfile with time.process_time, cumulative
 per part): synthesis (the chunk tables), integration (nlbeam.integrate), estimators (feeding
 Welch / histogram / moments per chunk), results (standard errors, intervals at the end).
-Usage: python benchmarks/noise_synthesis_cpu.py [duration_s] [--breakdown]"""
+With --tables, the integration of one noise block (2.94 s, default adaptive method) with the
+quintic table handed to the kernels as nodes (code 3) and as per-cell coefficients (code 4),
+alternating in this process, best of 7 CPU times.
+Usage: python benchmarks/noise_synthesis_cpu.py [duration_s] [--breakdown] [--tables]"""
 import cProfile
 import pstats
 import sys
@@ -47,3 +50,28 @@ if "--breakdown" in sys.argv:
     print("  breakdown (ms CPU of %.1f): " % (1e3 * total) + ", ".join(
         f"{k} {1e3 * v:.1f}" for k, v in cum.items())
         + f", other {1e3 * (total - sum(cum.values())):.1f}", flush=True)
+if "--tables" in sys.argv:
+    import numpy as np
+    from nlbeam import excitation as ex
+
+    blk = st.BandLimitedNoise((0.0, 200.0), rms=1e-4, seed=1).block(1)
+    ta, tb = blk.time_span()
+
+    def run(limit):
+        ex.COEF_MAX_NODES = limit  # 0: every quintic table as nodes (code 3)
+        e = nlbeam.Sampled.from_table(blk.t_start, blk.h, blk.tab, max_freq=200.0)
+        code = e.kernel_args()[0]
+        t = time.process_time()
+        tr = nlbeam.integrate(model, e, tb, method="adaptive", dt=res.dt, t0=ta)
+        return time.process_time() - t, code, tr
+
+    best, trs = {}, {}
+    for r in range(8):
+        for limit in (0, 1 << 20):
+            cpu, code, trs[code] = run(limit)
+            if r:
+                best[code] = min(best.get(code, np.inf), cpu)
+    n = trs[4].n_steps
+    print(f"  one block ({tb - ta:.3g} s, {n} steps): " + ", ".join(
+        f"code {c} {1e3 * v:.2f} ms ({1e9 * v / n:.0f} ns/step)" for c, v in sorted(best.items()))
+        + f"; the same trajectory: {np.array_equal(trs[3].x, trs[4].x)}", flush=True)

@@ -18,6 +18,10 @@ HARMONIC = 0
 SAMPLED = 1
 COSINE_SUM = 2
 SAMPLED_QUINTIC = 3
+SAMPLED_QUINTIC_COEF = 4
+#: a quintic table of at most this many nodes is handed to the kernels as per-cell
+#: coefficients (12 doubles a cell, 3x the table; code 4): larger ones as nodes (code 3)
+COEF_MAX_NODES = 1 << 20
 
 _EMPTY_TAB = np.zeros((1, 3))
 
@@ -160,8 +164,22 @@ class Sampled(Excitation):
         object.__setattr__(self, "tab", tab)
 
     def kernel_args(self):
+        """(code, p, tab) of the kernels: a quintic table of up to COEF_MAX_NODES nodes as
+        per-cell coefficients (code 4, built once, the same values as code 3 bit for bit and
+        ~2x faster to evaluate), a larger one as its nodes (code 3)."""
         p = np.array([float(self.t_start), float(self.h), float(self.tab.shape[0])])
-        return (SAMPLED if self.tab.shape[1] == 3 else SAMPLED_QUINTIC), p, self.tab
+        if self.tab.shape[1] == 3:
+            return SAMPLED, p, self.tab
+        if self.tab.shape[0] > COEF_MAX_NODES:
+            return SAMPLED_QUINTIC, p, self.tab
+        coef = self.__dict__.get("_coef")
+        if coef is None:
+            from ._kernels.tables import quintic_coefficients
+
+            coef = np.empty((self.tab.shape[0] - 1, 12))
+            quintic_coefficients(self.tab, float(self.h), coef)
+            object.__setattr__(self, "_coef", coef)
+        return SAMPLED_QUINTIC_COEF, p, coef
 
     def time_span(self):
         return (self.t_start, self.t_start + (self.tab.shape[0] - 1) * self.h)

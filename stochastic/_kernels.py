@@ -228,20 +228,53 @@ def histogram_count_batches(x, edges, uniform, bc, row, fill, size, counts, outs
 
 
 @njit(cache=True)
-def taylor_rows(D, T, scale, out):
-    """out[q, c R + r] = scale[q] sum_n D[c, q + n] T[n, r], n = 0 .. P (T: (P + 1, R)),
+def taylor_nodes(D, T, scale, out):
+    """out[c R + r, q] = scale[q] sum_n D[c, q + n] T[n, r], n = 0 .. P (T: (P + 1, R)),
     q = 0 .. scale.size - 1: the fine values of z, z', z'', ... from their Taylor series about
-    each coarse node c (noise.lines_on_grid). One pass, no temporaries; the terms summed in
-    the order of n. Returns OK."""
+    each coarse node c, node-major (rows are a block's table; noise._lines_nodes). One pass,
+    no temporaries; the terms summed in the order of n. Returns OK."""
     nc = D.shape[0]
     P1, R = T.shape
-    for q in range(scale.size):
-        sq = scale[q]
-        for c in range(nc):
-            base = c * R
-            for r in range(R):
+    nq = scale.size
+    for c in range(nc):
+        base = c * R
+        for r in range(R):
+            for q in range(nq):
                 acc = 0.0
                 for n in range(P1):
                     acc += D[c, q + n] * T[n, r]
-                out[q, base + r] = acc * sq
+                out[base + r, q] = acc * scale[q]
+    return OK
+
+
+@njit(cache=True)
+def fade_join(zi, zp, win, out):
+    """out[j] = the cross-faded y, y', y'', y''' (rows of ``zi``, ``zp``: the new and the
+    previous realization's z, z', z'', z''' at the fade's nodes j) with the windows ``win``
+    (8, n) = (w_in, its 3 derivatives, w_out, its 3 derivatives), by the product rule as
+    ``_BlockNoise.block_table`` wrote it with numpy (the same operations in the same order).
+    Returns OK."""
+    for j in range(out.shape[0]):
+        w0 = win[0, j]
+        w1 = win[1, j]
+        w2 = win[2, j]
+        w3 = win[3, j]
+        v0 = win[4, j]
+        v1 = win[5, j]
+        v2 = win[6, j]
+        v3 = win[7, j]
+        a0 = zi[j, 0]
+        a1 = zi[j, 1]
+        a2 = zi[j, 2]
+        a3 = zi[j, 3]
+        b0 = zp[j, 0]
+        b1 = zp[j, 1]
+        b2 = zp[j, 2]
+        b3 = zp[j, 3]
+        out[j, 0] = w0 * a0 + v0 * b0
+        out[j, 1] = w1 * a0 + w0 * a1 + v1 * b0 + v0 * b1
+        out[j, 2] = (w2 * a0 + 2.0 * w1 * a1 + w0 * a2
+                     + v2 * b0 + 2.0 * v1 * b1 + v0 * b2)
+        out[j, 3] = (w3 * a0 + 3.0 * w2 * a1 + 3.0 * w1 * a2 + w0 * a3
+                     + v3 * b0 + 3.0 * v2 * b1 + 3.0 * v1 * b2 + v0 * b3)
     return OK

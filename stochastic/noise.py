@@ -218,27 +218,32 @@ def _lines_direct(f0, df, coeffs, h, m, n_fft, n_deriv=2):
 def lines_on_grid(f0, df, coeffs, h, m, n_fft, n_deriv=2):
     """The line sum z(tau) = Re sum_k c_k exp(2 pi i (f0 + k df) tau) and its first
     ``n_deriv`` derivatives at tau_j = j h, j = 0 .. m - 1 (s): array (n_deriv + 1, m) in u,
-    u/s, u/s^2, ...
+    u/s, u/s^2, ... (the transpose of :func:`_lines_nodes`, which says how).
 
     coeffs: complex c_k = a_k exp(i phi_k) (u), k = 0 .. K - 1, K <= n_fft; n_fft h must
     exceed the span (m - 1) h and equal 1/df. This is the inner loop of the block synthesis:
     any method with the same output to ~1e-12 relative may replace it without changing a
-    statistic.
+    statistic."""
+    return _lines_nodes(f0, df, coeffs, h, m, n_fft, n_deriv).T
+
+
+def _lines_nodes(f0, df, coeffs, h, m, n_fft, n_deriv=2):
+    """:func:`lines_on_grid` node-major: array (m, n_deriv + 1), row j = (z, z', ...) at j h.
 
     Method: z and its derivatives up to order P + n_deriv on a coarse grid of step R h (R a
     divisor of n_fft, the grid nodes at the centres of runs of R fine nodes) by inverse
     FFTs of length n_fft / R (lines folded mod n_fft / R, exact), then every fine value by
     the Taylor series of order P about its centre: z^(q)(tau_c + d) = sum_n z^(q+n)(tau_c)
-    d^n / n!, one matrix product per row (einsum). With omega_max R h / 2 <= 0.6 the truncation is
-    below 1e-16 max|z| (Bernstein: |z^(n)| <= omega_max^n max|z|). Where no such R divides
-    n_fft: three inverse FFTs of length n_fft on the fine grid."""
+    d^n / n! (a compiled loop, _kernels.taylor_nodes). With omega_max R h / 2 <= 0.6 the
+    truncation is below 1e-16 max|z| (Bernstein: |z^(n)| <= omega_max^n max|z|). Where no
+    such R divides n_fft: n_deriv + 1 inverse FFTs of length n_fft on the fine grid."""
     coeffs = np.asarray(coeffs, dtype=complex)
     K = coeffs.size
     w = 2.0 * math.pi * (f0 + df * np.arange(K))
     wmax = float(np.max(np.abs(w))) if K else 0.0
     R, P = _decimation(n_fft, max(wmax, 2.0 * math.pi * abs(f0)) * h)
     if R == 1:
-        return _lines_direct(f0, df, coeffs, h, m, n_fft, n_deriv)
+        return np.ascontiguousarray(_lines_direct(f0, df, coeffs, h, m, n_fft, n_deriv).T)
     M = n_fft // R
     nc = -(-m // R)
     half = 0.5 * (R - 1)
@@ -262,11 +267,11 @@ def lines_on_grid(f0, df, coeffs, h, m, n_fft, n_deriv=2):
     d = np.arange(R) - half
     n = np.arange(P + 1)
     T = d[None, :] ** n[:, None] / scipy.special.factorial(n)[:, None]  # (P + 1, R)
-    out = np.empty((n_deriv + 1, nc * R))
+    out = np.empty((nc * R, n_deriv + 1))
     # a compiled loop (not BLAS: a threaded BLAS spins on a loaded machine, 4x the CPU; not
-    # einsum: its generic loop cost 58 % of the synthesis)
-    _kernels.taylor_rows(D, np.ascontiguousarray(T), h ** -np.arange(n_deriv + 1.0), out)
-    return out[:, :m]
+    # einsum: its generic loop cost 58 % of the synthesis), node-major rows (a block's table)
+    _kernels.taylor_nodes(D, np.ascontiguousarray(T), h ** -np.arange(n_deriv + 1.0), out)
+    return out[:m]
 
 
 class _BlockNoise(Excitation):
@@ -473,25 +478,27 @@ class _BlockNoise(Excitation):
         return int(i)
 
     def _realization(self, i):
-        """z_i, z_i', z_i'', z_iy''' (rows) on tau_j = j h, j = 0 .. n_block + n_fade (a small
+        """z_i, z_i', z_i'', z_i''' (columns) on tau_j = j h, j = 0 .. n_block + n_fade (a small
         LRU cache holds the last realizations and blocks: memory stays that of a few blocks)."""
         if i in self._cache:
             self._cache.move_to_end(i)
             return self._cache[i]
         comp = self.components(i)
         a, ph, u = comp["amplitudes"], comp["phases"], comp["offset"]
-        z = lines_on_grid(self.band[0] + u * self.df, self.df, a * np.exp(1j * ph), self.h,
-                          self.n_block + self.n_fade + 1, self.n_fft, n_deriv=3)
+        z = _lines_nodes(self.band[0] + u * self.df, self.df, a * np.exp(1j * ph), self.h,
+                         self.n_block + self.n_fade + 1, self.n_fft, n_deriv=3)
         self._cache[i] = z
         while len(self._cache) > 4:
             self._cache.popitem(last=False)
         return z
 
     def _fade(self):
-        """(w_in, w_out) and their first three derivatives on the fade's n_fade + 1 nodes,
-        computed once per noise (the same for every block)."""
+        """(8, n_fade + 1): w_in, w_out and their first three derivatives on the fade's nodes
+        (rows w_in, w_in', w_in'', w_in''', w_out, ...), computed once per noise (the same
+        for every block)."""
         if "_fade_tables" not in self.__dict__:
-            self._fade_tables = self._fade_compute()
+            win, wout = self._fade_compute()
+            self._fade_tables = np.array(win + wout)
         return self._fade_tables
 
     def _fade_compute(self):
@@ -525,21 +532,14 @@ class _BlockNoise(Excitation):
             return self._cache[key]
         nb, nf = self.n_block, self.n_fade
         z = self._realization(i)
-        tab = np.empty((nb + 1, 4))
         if i == 0:
-            tab[:] = z[:, : nb + 1].T
+            tab = z[: nb + 1]  # a view of the cached realization (nothing writes into it)
         else:
-            tab[nf + 1:] = z[:, nf + 1: nb + 1].T
-            zp = self._realization(i - 1)[:, nb: nb + nf + 1]
-            zi = z[:, : nf + 1]
-            win, wout = self._fade()
-            (w0, w1, w2, w3), (v0, v1, v2, v3) = win, wout
-            tab[: nf + 1, 0] = w0 * zi[0] + v0 * zp[0]
-            tab[: nf + 1, 1] = w1 * zi[0] + w0 * zi[1] + v1 * zp[0] + v0 * zp[1]
-            tab[: nf + 1, 2] = (w2 * zi[0] + 2.0 * w1 * zi[1] + w0 * zi[2]
-                                + v2 * zp[0] + 2.0 * v1 * zp[1] + v0 * zp[2])
-            tab[: nf + 1, 3] = (w3 * zi[0] + 3.0 * w2 * zi[1] + 3.0 * w1 * zi[2] + w0 * zi[3]
-                                + v3 * zp[0] + 3.0 * v2 * zp[1] + 3.0 * v1 * zp[2] + v0 * zp[3])
+            tab = np.empty((nb + 1, 4))
+            tab[nf + 1:] = z[nf + 1: nb + 1]
+            zp = self._realization(i - 1)[nb: nb + nf + 1]
+            # y = w_in z_i + w_out z_(i-1) and its derivatives (product rule), compiled
+            _kernels.fade_join(z[: nf + 1], zp, self._fade(), tab[: nf + 1])
         res = (i * self.block_duration, tab)
         self._cache[key] = res
         while len(self._cache) > 4:

@@ -1,6 +1,7 @@
 """Excitation evaluation: y, y', y'' (m or N and rates) of a harmonic (code 0), a sampled
-table (code 1: cubic Hermite from y, y', y''; code 3: quintic Hermite from y, y', y'', y''')
-or a sum of cosines (code 2) at time t (s)."""
+table (code 1: cubic Hermite from y, y', y''; code 3: quintic Hermite from y, y', y'', y''';
+code 4: the same quintic Hermite table as per-cell coefficients, ``tables.py``) or a sum of
+cosines (code 2) at time t (s)."""
 import math
 
 from .codes import ERR_EXCITATION_RANGE
@@ -70,9 +71,45 @@ def _quintic_y_yd(i, th, h, tab):
     return y, yd, b1, b2, b3, b4, b5
 
 
+@njit(cache=True, inline="always")
+def _coef_cell(t, p, tab):
+    """Cell i of a coefficient table (code 4; p = [t_start, h, nodes]) holding t and the
+    position th in [0, 1] inside it, as ``_table_cell``: (i, th, status)."""
+    h = p[1]
+    n = tab.shape[0] + 1
+    u = (t - p[0]) / h
+    if u < -1e-9 or u > (n - 1) + 1e-9:
+        return 0, 0.0, ERR_EXCITATION_RANGE
+    i = int(math.floor(u))
+    if i < 0:
+        i = 0
+    if i > n - 2:
+        i = n - 2
+    return i, u - i, 0
+
+
+@njit(cache=True, inline="always")
+def _coef_y_yd(i, th, tab):
+    """y and y' in cell i of a coefficient table (code 4) by Horner: the values the quintic
+    table (code 3) gives, bit for bit (the same coefficients, the same sums)."""
+    y = tab[i, 0] + th * (tab[i, 1] + th * (tab[i, 2] + th * (tab[i, 3] + th * (
+        tab[i, 4] + th * tab[i, 5]))))
+    yd = tab[i, 6] + th * (tab[i, 7] + th * (tab[i, 8] + th * (tab[i, 9] + th * (
+        tab[i, 10] + th * tab[i, 11]))))
+    return y, yd
+
+
 @njit(cache=True)
 def excite(t, code, p, tab):
     """(y, y', y'', status) at time t (s)."""
+    if code == 4:
+        i, th, st = _coef_cell(t, p, tab)
+        if st != 0:
+            return 0.0, 0.0, 0.0, st
+        y, yd = _coef_y_yd(i, th, tab)
+        ydd = (tab[i, 7] + th * (2.0 * tab[i, 8] + th * (3.0 * tab[i, 9] + th * (
+            4.0 * tab[i, 10] + th * 5.0 * tab[i, 11])))) / p[1]
+        return y, yd, ydd, 0
     if code == 3:
         i, th, th2, th3, h, st = _table_cell(t, p, tab)
         if st != 0:
@@ -118,7 +155,13 @@ def excite(t, code, p, tab):
 def excite_yyd(t, code, p, tab):
     """(y, y', status) at time t: ``excite`` without y'' (what a right-hand side needs). The
     sampled table (code 1) is evaluated by the same expressions as in ``excite`` (bit for bit
-    the same y, y'), without the y'' polynomial; so is the quintic table (code 3)."""
+    the same y, y'), without the y'' polynomial; so are the quintic tables (codes 3, 4)."""
+    if code == 4:
+        i, th, st = _coef_cell(t, p, tab)
+        if st != 0:
+            return 0.0, 0.0, st
+        y, yd = _coef_y_yd(i, th, tab)
+        return y, yd, 0
     if code == 3:
         i, th, th2, th3, h, st = _table_cell(t, p, tab)
         if st != 0:
@@ -139,6 +182,12 @@ def excite_yyd(t, code, p, tab):
 def excite_jerk(t, code, p, tab):
     """y''' at time t: the derivative of the y'' that ``excite`` returns (0 on a sampled table
     without a y'' column, where that y'' is constant in each cell)."""
+    if code == 4:
+        i, th, st = _coef_cell(t, p, tab)
+        if st != 0:
+            return 0.0
+        return (2.0 * tab[i, 8] + th * (6.0 * tab[i, 9] + th * (
+            12.0 * tab[i, 10] + th * 20.0 * tab[i, 11]))) / (p[1] * p[1])
     if code == 3:
         i, th, th2, th3, h, st = _table_cell(t, p, tab)
         if st != 0:

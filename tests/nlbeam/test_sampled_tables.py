@@ -68,5 +68,28 @@ def test_quintic_table_rejects_a_missing_ydd_and_evaluates_outside_as_error():
     with pytest.raises(ValueError, match="outside"):
         tab.evaluate([0.5])
     same = nlbeam.Sampled.from_table(0.0, 0.1, tab.tab)
-    assert same.kernel_args()[0] == tab.kernel_args()[0] == 3
+    assert same.kernel_args()[0] == tab.kernel_args()[0] == 4
     np.testing.assert_array_equal(same.evaluate([0.17])[0], tab.evaluate([0.17])[0])
+
+
+def test_coefficient_table_gives_the_node_tables_values_bit_for_bit(monkeypatch):
+    """The kernels get a quintic table as per-cell coefficients (code 4, two Horner sums per
+    lookup); they must give exactly what the node table (code 3, coefficients solved at every
+    lookup) gives, at random times and at the nodes, and a table above COEF_MAX_NODES goes
+    as nodes."""
+    from nlbeam import excitation as ex
+    from nlbeam._kernels.excite import excite_yyd
+    tab = table(1e-3, True)
+    code, p, coef = tab.kernel_args()
+    assert code == 4 and coef.shape == (tab.tab.shape[0] - 1, 12)
+    t = np.concatenate([T, np.arange(tab.tab.shape[0]) * 1e-3])
+    t = t[t <= tab.time_span()[1]]
+    for f in (excite, excite_jerk, excite_yyd):
+        got = np.array([f(ti, 4, p, coef) for ti in t])
+        ref = np.array([f(ti, 3, p, tab.tab) for ti in t])
+        np.testing.assert_array_equal(got, ref)
+    assert excite(tab.time_span()[1] + 1e-3, 4, p, coef)[3] != 0  # outside: an error status
+    monkeypatch.setattr(ex, "COEF_MAX_NODES", tab.tab.shape[0] - 1)
+    big = nlbeam.Sampled.from_table(0.0, 1e-3, tab.tab)
+    assert big.kernel_args()[0] == 3
+    np.testing.assert_array_equal(big.evaluate(T[:50]), tab.evaluate(T[:50]))
