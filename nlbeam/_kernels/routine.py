@@ -1,8 +1,8 @@
 """Routine steps of the fixed-step RK4 loop without variational equations: a lean loop for
 the steps where nothing happens (free flight onto the next grid point, or an ordinary time
 step inside a contact), called by the plain integration loop and handing back at the first
-step that needs more (a possible contact boundary, the graded exit phase or the maximum penetration of a
-contact, any failure, the end of the record).
+step that needs more (a possible contact boundary, the graded exit phase or the maximum
+penetration of a contact, any failure, the end of the record).
 
 The same operations in the same order as the general loop (loop.py), so the same doubles bit
 for bit; what it saves is repeated work, not arithmetic: the excitation (y, y') is evaluated
