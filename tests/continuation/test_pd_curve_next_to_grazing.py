@@ -8,7 +8,7 @@ the square root of its depth, and a stiff stop's period-doubling curve runs alon
 curve at a contact depth of a few micrometres without meeting it. bifurcation_curve must then
 report no flip-grazing point and its points must be those of the closed form
 (tests/exact_pwl.py). (A flip-grazing point needs a second contact grazing while the first one
-is deep; not covered here.)"""
+is deep: test_flip_grazing_exact.py.)"""
 import warnings
 
 import numpy as np
