@@ -326,8 +326,14 @@ class CurveSystem:
         (grazing: one flow to the grazing phase per unknown, and two shooting evaluations)."""
         n, D = self.n, self.D
         w = self.prob.scale_u
-        ev = self._evaluate_full(z)
-        mu = self._multipliers_of(z, ev) if ev.Ms else None
+        if self.grazing and not jac:
+            # the grazing equations need no monodromy: the flow alone (the multipliers, when
+            # read, from their own evaluation)
+            ev = self._evaluate(z, False)
+            mu = self._multipliers_of(z, None)
+        else:
+            ev = self._evaluate_full(z)
+            mu = self._multipliers_of(z, ev) if ev.Ms else None
         if self.grazing:
             extra = self._grazing_rows(z)
         else:
@@ -364,6 +370,8 @@ class CurveSystem:
         prob = self.prob
         name = self._lift_name() if self.grazing and self.grazing_side == "touch" else None
         if name is None:
+            if ev is None:
+                return lambda: prob.multipliers(self._evaluate(z, True).Ms)
             return lambda: prob.multipliers(ev.Ms)
         u, f, p = self.unpack(z)
 
