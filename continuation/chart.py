@@ -32,7 +32,9 @@ class StabilityChart:
     the reference diagram's amplitude (m or N) the curves start from; f_range (Hz), p_range;
     label_frequency, label_value (k,): the grid points where the attractor reached from rest
     was classified, label_order (k,): its order (1, 2, 3, ...; 0: none of order <= 6 found,
-    e.g. irregular); skipped: one line per bifurcation whose curve was not traced (why);
+    e.g. irregular); skipped: one line per bifurcation whose curve was not started
+    ('not started: ...', why and what to try) or was traced in part ('traced in part:
+    ...', the ends);
     model_parameters, settings, n_evaluations (shooting evaluations of all curves),
     wall_time (s)."""
 
@@ -158,7 +160,8 @@ def stability_chart(model, p_range, f_range, orders=(1, 2, 3), *, amplitude=None
         if progress:
             progress(f"diagram at {A0:.4g}: {len(frc.bifurcations)} bifurcations "
                      f"({time.perf_counter() - t0:.1f} s)")
-    curves, skipped = [], []
+    curves, skipped, partial = [], [], []
+    advice = {}  # why a start failed and what to try -> the starts
     n_eval = 0
     for bf in frc.bifurcations:
         if bf.kind not in kinds or bf.order not in orders:
@@ -176,11 +179,16 @@ def stability_chart(model, p_range, f_range, orders=(1, 2, 3), *, amplitude=None
                                       ds_max=ds_max, error=False,
                                       max_evaluations=max_evaluations)
         except (ConvergenceError, nlbeam.IntegrationError) as exc:
-            skipped.append(f"{bf.kind} (order {bf.order}) at {bf.frequency:.6g} Hz: {exc}")
+            skipped.append(f"not started: {bf.kind} (order {bf.order}) at {bf.frequency:.6g} "
+                           f"Hz: {exc}")
+            advice.setdefault(getattr(exc, "advice", "see the messages above"), []).append(
+                f"{bf.kind} (order {bf.order}) at {bf.frequency:.6g} Hz")
             continue
         if caught:
-            skipped.append(f"{bf.kind} (order {bf.order}) at {bf.frequency:.6g} Hz: traced "
-                           f"in part ({', '.join(c.ends)})")
+            skipped.append(f"traced in part: {bf.kind} (order {bf.order}) at "
+                           f"{bf.frequency:.6g} Hz ({', '.join(c.ends)})")
+            partial.append(f"{bf.kind} (order {bf.order}) at {bf.frequency:.6g} Hz "
+                           f"({', '.join(c.ends)})")
         n_eval += c.n_evaluations
         curves.append(c)
         if progress:
@@ -197,9 +205,15 @@ def stability_chart(model, p_range, f_range, orders=(1, 2, 3), *, amplitude=None
         if progress:
             progress(f"labels: {len(lf)} attractors ({time.perf_counter() - t0:.1f} s)")
     if skipped:
-        warnings.warn("stability_chart: not traced or traced in part: " + "; ".join(skipped)
-                      + ". Try a smaller ds_max, more max_points, or bifurcation_curve on "
-                      "that point with segments=4", ContinuationWarning, stacklevel=2)
+        msg = []
+        for why, starts in advice.items():
+            msg.append(f"{len(starts)} curves not started ({'; '.join(starts)}): {why}")
+        if partial:
+            msg.append(f"{len(partial)} curves traced in part ({'; '.join(partial)}): try a "
+                       "smaller ds_max, a larger max_evaluations (None: no limit), more "
+                       "max_points, or bifurcation_curve on that point with segments=4")
+        warnings.warn("stability_chart: " + ". ".join(msg) + " (StabilityChart.skipped: "
+                      "one line each)", ContinuationWarning, stacklevel=2)
     return StabilityChart(
         curves=curves, parameter="amplitude", amplitude=A0, f_range=(f_lo, f_hi),
         p_range=(a_lo, a_hi), label_frequency=np.array(lf), label_value=np.array(la),

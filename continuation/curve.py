@@ -667,7 +667,10 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     for d in directions:
         # each direction from the start (the problem may have been rephased by the other)
         sysm.restore(snapshot)
-        start = tr.start(d)
+        try:
+            start = tr.start(d)
+        except ConvergenceError as exc:
+            raise sysm.start_failure(exc) from None
         pts, why = tr.trace(start, _detector(tr, special, tests))
         halves.append((start, pts))
         ends.append(why)

@@ -20,6 +20,7 @@ Newton on this system converges quadratically; it converges linearly (fast) othe
 """
 from __future__ import annotations
 
+import copy
 import dataclasses
 import itertools
 import math
@@ -32,6 +33,10 @@ from ._newton import ConvergenceError
 from .shooting import _problem_from_state, event_elements
 
 KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing")
+#: the gap lift (relative to the orbit's size) of the free-side multipliers on a grazing curve
+LIFT = 1e-6
+_CODIM2_NAME = {"fold": "fold-grazing", "period-doubling": "flip-grazing",
+                "neimark-sacker": "neimark-sacker-grazing"}
 
 
 def compound2(M):
@@ -75,15 +80,76 @@ def borders(A):
 
 
 @dataclasses.dataclass
-class CurveState:
-    """What is known at one point of the extended system's solution set."""
+class GrazingCandidate:
+    """An extremum of a stop's penetration over an orbit: score (its distance from zero
+    relative to the orbit's size, plus for a maximum inside a contact the approach velocity
+    of that contact relative to the orbit's velocity scale), element, phase (excitation
+    periods), side ('touch': a maximum, touching from outside; 'lift-off': a minimum, a
+    contact barely lifting off)."""
 
-    z: np.ndarray
-    G: np.ndarray
-    J: np.ndarray  # dG/dz (D - 1, D), scaled
-    multipliers: np.ndarray | None
-    xmax: float
-    n_impacts: int
+    score: float
+    element: int
+    phase: float
+    side: str
+
+
+def nearest_grazing(prob, u0, f, elements, phase=None):
+    """The GrazingCandidate of the orbit u0 (shooting states of prob at frequency f Hz) closest
+    to grazing over the stops ``elements`` (with ``phase``: the extremum nearest that
+    excitation phase, periods), or None (no extremum)."""
+    tr = prob.trajectory(u0, f)
+    model, ex = prob.forcing(f)
+    _, w, wy, gap = model.element_geometry()
+    y, yd = ex.evaluate(tr.t)
+    cands = []
+    a = max(float(np.max(np.abs(tr.x))), 1e-300)
+    v_scale = a * 2 * np.pi * f / prob.order
+    for e in elements:
+        d = tr.x @ w[e] + wy[e] * y - gap[e]
+        dd = tr.v @ w[e] + wy[e] * yd
+        dc = d[:-1]  # one period, periodic
+        k = np.nonzero((dc >= np.roll(dc, 1)) & (dc > np.roll(dc, -1)))[0]
+        for i in k:
+            # a maximum inside a contact (d > 0) is a grazing contact only if the
+            # contact began with a small approach velocity: an impact's peak penetration
+            # is tiny under a stiff contact law, but its approach velocity is not
+            score = abs(dc[i]) / a
+            if dc[i] > 0:
+                j = i
+                while j > i - len(dc) and dc[j % len(dc)] > 0:
+                    j -= 1
+                score += abs(dd[(j + 1) % len(dc)]) / v_scale
+            cands.append(GrazingCandidate(score, e, tr.t[i] * f, "touch"))
+        # a minimum near zero: a sustained contact that barely lifts off (or a separation
+        # that barely reaches the stop again), as in the paper model's chattering orbits
+        # below 9.1 Hz, whose impact peaks (maxima) lie 1e-3 of the orbit's size in
+        # contact while the grazing minimum is 1e-5 from zero
+        kmin = np.nonzero((dc <= np.roll(dc, 1)) & (dc < np.roll(dc, -1)))[0]
+        for i in kmin:
+            cands.append(GrazingCandidate(abs(dc[i]) / a, e, tr.t[i] * f, "lift-off"))
+    if not cands:
+        return None
+    if phase is None:
+        return min(cands, key=lambda c: c.score)
+    n = prob.order
+    return min(cands, key=lambda c: abs((c.phase - phase + 0.5 * n) % n - 0.5 * n))
+
+
+class CurveState:
+    """What is known at one point of the extended system's solution set: z, G, J (dG/dz
+    (D - 1, D), scaled; None if not computed), multipliers (computed when first read: the
+    corrector's iterates never need them), xmax (m), n_impacts."""
+
+    def __init__(self, z, G, J, multipliers, xmax, n_impacts):
+        self.z, self.G, self.J = z, G, J
+        self._mu = multipliers  # an array, None, or a callable giving one
+        self.xmax, self.n_impacts = xmax, n_impacts
+
+    @property
+    def multipliers(self):
+        if callable(self._mu):
+            self._mu = self._mu()
+        return self._mu
 
 
 class CurveSystem:
@@ -199,44 +265,57 @@ class CurveSystem:
             raise ValueError("kind: 'grazing' needs a model with a contact element (a stop)")
         if element is not None and element not in idx:
             raise ValueError(f"element: must be one of the stops {idx}, got {element!r}")
-        tr = prob.trajectory(u0, f)
-        model, ex = prob.forcing(f)
-        _, w, wy, gap = model.element_geometry()
-        y, yd = ex.evaluate(tr.t)
-        best = (np.inf, None, None)
-        a = max(float(np.max(np.abs(tr.x))), 1e-300)
-        v_scale = a * 2 * np.pi * f / self.order
-        for e in ([element] if element is not None else idx):
-            d = tr.x @ w[e] + wy[e] * y - gap[e]
-            dd = tr.v @ w[e] + wy[e] * yd
-            dc = d[:-1]  # one period, periodic
-            k = np.nonzero((dc >= np.roll(dc, 1)) & (dc > np.roll(dc, -1)))[0]
-            for i in k:
-                # a maximum inside a contact (d > 0) is a grazing contact only if the
-                # contact began with a small approach velocity: an impact's peak penetration
-                # is tiny under a stiff contact law, but its approach velocity is not
-                score = abs(dc[i]) / a
-                if dc[i] > 0:
-                    j = i
-                    while j > i - len(dc) and dc[j % len(dc)] > 0:
-                        j -= 1
-                    score += abs(dd[(j + 1) % len(dc)]) / v_scale
-                if score < best[0]:
-                    best = (score, e, tr.t[i] * f)
-            # a minimum near zero: a sustained contact that barely lifts off (or a separation
-            # that barely reaches the stop again), as in the paper model's chattering orbits
-            # below 9.1 Hz, whose impact peaks (maxima) lie 1e-3 of the orbit's size in
-            # contact while the grazing minimum is 1e-5 from zero
-            kmin = np.nonzero((dc <= np.roll(dc, 1)) & (dc < np.roll(dc, -1)))[0]
-            for i in kmin:
-                if abs(dc[i]) / a < best[0]:
-                    best = (abs(dc[i]) / a, e, tr.t[i] * f)
-        if best[1] is None:
+        best = nearest_grazing(prob, u0, f, [element] if element is not None else idx, phase)
+        if best is None:
             raise ConvergenceError("grazing: the orbit has no extremum of the penetration; "
                                    "give phase= (excitation periods) of the grazing contact")
-        e = best[1]
-        ph = best[2] if phase is None else float(phase)
-        return e, ph
+        self.grazing_side = best.side
+        return best.element, best.phase if phase is None else float(phase)
+
+    def start_failure(self, exc):
+        """A ConvergenceError whose message says why the start (the curve's first point) did
+        not converge and what to try, from the start orbit (exc: the corrector's error)."""
+        where = f"{self.kind} curve (order {self.order}): the start did not converge ({exc})"
+
+        def failure(advice):
+            err = ConvergenceError(f"{where}. {advice}")
+            err.advice = advice  # the same for every start that fails the same way
+            return err
+
+        u0, f0, p0 = self.unpack(self.z0)
+        self._set(p0)
+        if self.grazing:
+            if getattr(self, "grazing_side", "") == "lift-off":
+                return failure(
+                    "Its grazing contact is a lift-off: a minimum of the penetration "
+                    "inside a sustained (chattering) contact barely reaching zero, where a new "
+                    "contact may begin at once; a law with memory (Lankarani-Nikravesh: the "
+                    "onset velocity) resets there, so the shooting map jumps (the paper model "
+                    "near 9.19 Hz: 1.8e-3 for a 1.4e-8 move of the state) and the grazing "
+                    "condition has no smooth solution to converge to. Try: phase= "
+                    "(excitation periods) of another extremum of the penetration; or the "
+                    "folds and period doublings of this region (their curves bound the same "
+                    "regions of the chart); or a diagram at another amplitude, where the "
+                    "grazing contact may be a clean touch")
+            return failure(
+                "Try element= / phase= (excitation periods) of the grazing contact, "
+                "or a diagram point farther from other grazing points")
+        g = nearest_grazing(self.prob, u0, f0, event_elements(self.prob.base_model))
+        if g is not None and g.score < 1e-3:
+            return failure(
+                f"The start orbit grazes stop {g.element} (its penetration's "
+                f"{'minimum' if g.side == 'lift-off' else 'maximum'} at phase "
+                f"{g.phase:.6g} periods is {g.score:.1e} of the orbit's size from zero): the "
+                f"{self.kind} lies at (or closer than the corrector can separate from) a "
+                "grazing point, where the shooting map is not smooth. Trace the grazing curve "
+                "instead (from the diagram's grazing point next to it, a Bifurcation of kind "
+                "'grazing'; or an orbit solved at its frequency): its points carry the "
+                f"multipliers, and its special points ('{_CODIM2_NAME[self.kind]}') mark "
+                "where this curve leaves it; or start from this bifurcation "
+                "in a diagram at another amplitude, where it lies away from the grazing")
+        return failure(
+            "Try segments=4 (multiple shooting), a smaller step (dt_scale=0.5), "
+            "or a start located more precisely (accuracy='high' in the diagram)")
 
     # --- the system ----------------------------------------------------------------------------
     def evaluate(self, z, jac=True):
@@ -247,8 +326,14 @@ class CurveSystem:
         (grazing: one flow to the grazing phase per unknown, and two shooting evaluations)."""
         n, D = self.n, self.D
         w = self.prob.scale_u
-        ev = self._evaluate_full(z)
-        mu = self.prob.multipliers(ev.Ms) if ev.Ms else None
+        if self.grazing and not jac:
+            # the grazing equations need no monodromy: the flow alone (the multipliers, when
+            # read, from their own evaluation)
+            ev = self._evaluate(z, False)
+            mu = self._multipliers_of(z, None)
+        else:
+            ev = self._evaluate_full(z)
+            mu = self._multipliers_of(z, ev) if ev.Ms else None
         if self.grazing:
             extra = self._grazing_rows(z)
         else:
@@ -273,6 +358,51 @@ class CurveSystem:
             if i in (n, n + 1):
                 J[:n, i] = (evp.R - ev.R) / (h * w)
         return CurveState(z.copy(), G, J, mu, float(ev.xmax), int(ev.n_impacts))
+
+    def _multipliers_of(self, z, ev):
+        """A callable: the multipliers at z (ev: its evaluation). On a grazing curve of a
+        touching contact (a maximum of the penetration at zero), those of the limit from
+        the free side: the integrator may see a contact of depth ~ the corrector's
+        tolerance at the tangent peak, whose contact phase spoils the monodromy (measured
+        on a stiff piecewise-linear stop: 5e-6, up to 5e-2 at some points); so the
+        monodromy along the orbit is taken with the stop's gap lifted by LIFT and 2 LIFT of
+        the orbit's size, and extrapolated linearly to no lift (two more evaluations)."""
+        prob = self.prob
+        name = self._lift_name() if self.grazing and self.grazing_side == "touch" else None
+        if name is None:
+            if ev is None:
+                return lambda: prob.multipliers(self._evaluate(z, True).Ms)
+            return lambda: prob.multipliers(ev.Ms)
+        u, f, p = self.unpack(z)
+
+        def lifted():
+            from ._floquet import multipliers
+
+            self._set(p)
+            Ms = []
+            for k in (1, 2):
+                lp = copy.copy(prob)
+                lp._fm = None
+                lp._cache = (None, None)
+                g = get_parameter(prob.base_model, name)
+                lp.base_model = with_parameter(prob.base_model, name,
+                                               g + k * LIFT * prob.scale_u[0])
+                self.n_evaluations += 1
+                Ms.append(lp.evaluate(u, f, jac=True, jac_p=False).Ms)
+            return multipliers([2 * a - b for a, b in zip(*Ms)])
+
+        return lifted
+
+    def _lift_name(self):
+        """The parameter name of the grazing stop's gap, or None (no such parameter)."""
+        from nlbeam.parameters import parameter_names
+
+        names = parameter_names(self.prob.base_model)
+        for name in (f"elements[{self.element}].gap", "gap"):
+            if name in names and (name != "gap" or len(event_elements(self.prob.base_model))
+                                  == 1):
+                return name
+        return None
 
     def _evaluate_full(self, z):
         """The shooting evaluation at z with the monodromy (dR/du)."""

@@ -10,7 +10,6 @@ Newton on the exact period map."""
 import warnings
 
 import numpy as np
-import pytest
 import scipy.optimize
 
 import continuation
@@ -67,19 +66,16 @@ def _exact_fold_grazing(f, A, z0, lift):
     return np.array([u[2] * S[2], u[3] * S[3]])
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "issue 14: multipliers on a grazing curve are spoiled where the integrator sees a tiny "
-    "contact at the tangent peak (measured against the exact monodromy: 5e-6 at most curve "
-    "points, 4.6e-3 and 5.3e-2 at two of them), so the first fold-grazing point is 6.9e-5 Hz "
-    "/ 5.7e-4 N off, its stated error 3.1e-5 Hz / 2.5e-4 N; fix in continuation/extended.py "
-    "(the grazing orbit's monodromy from the free side)"))
 def test_fold_grazing_points_on_a_grazing_curve_against_the_closed_form():
     """The grazing curve from the diagram's grazing point near 0.505 Hz at 4 N, traced in
     amplitude over 0.3-12 N, reports two fold-grazing points; each agrees with the exact one
     (Newton on the closed form) within its stated errors (bracket + integration error).
-    Measured (exact: 0.5570604 Hz, 1.2585253 N and 0.6380301 Hz, 2.2254968 N): the first off
-    by 6.9e-5 Hz, -5.7e-4 N (stated 3.1e-5 Hz, 2.5e-4 N: fails); the second by -1.5e-7 Hz,
-    -8.7e-7 N (stated 3.0e-4 Hz, 7.8e-3 N: 2000 times pessimistic). 6 s CPU."""
+    The curve's multipliers are those of the free side (continuation.extended: the stop's
+    gap lifted by 1e-6 and 2e-6 of the orbit's size, extrapolated to no lift); with the
+    integrator's multipliers of the touching orbit the first point was 6.9e-5 Hz off
+    against a stated 3.1e-5 Hz. Measured (exact: 0.5570604 Hz, 1.2585253 N and 0.6380301
+    Hz, 2.2254968 N): off by 5.0e-8 Hz, 1.6e-6 N (stated 1.0e-7 Hz, 3.2e-6 N) and by
+    -1.5e-7 Hz, -8.7e-7 N (stated 2.9e-7 Hz, 1.7e-6 N). 8 s CPU."""
     osc = _osc(A0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", continuation.ContinuationWarning)
