@@ -11,7 +11,7 @@ from typing import Protocol
 import numpy as np
 
 from ._newton import ContinuationWarning, ConvergenceError
-from .corners import Retrace, check_crossing, far_side, map_jump, tangent
+from .corners import JUMP_HS, Retrace, check_crossing, far_side, map_jump, tangent
 
 KINDS = ("fold", "period-doubling", "neimark-sacker")  # from the test functions
 
@@ -143,7 +143,11 @@ class Tracer:
     turn_tol (a tangent's parameter component below this leaves the direction uncertain),
     retrace_tol (a point within this fraction of a segment's length of a traced segment
     re-enters it), corner_segments (shooting segments tried, in turn, at a corner that single
-    shooting cannot pass).
+    shooting cannot pass), probe_after (after this many failed steps in a row at one point,
+    and after every as many more, the map is probed for a jump just ahead, corners.map_jump,
+    at the cost of eight flows without variational equations: where it jumps, no shorter step,
+    far-side solve or extra segment can go on, and the branch ends there as 'discontinuous
+    map' at once; 0: only once every other way has failed).
 
     The corrector is a quasi-Newton iteration on the bordered system: the Jacobian at the
     predictor is dR/du from the variational equations (or, for a problem without them, the
@@ -160,7 +164,7 @@ class Tracer:
                  max_iter=10, jump_after=2, jump_steps=(1e-5, 1e-4, 1e-3), jump_max_distance=0.05,
                  grazing_iter=8, grazing_ds=0.01, contraction=0.7, noise_tol=1e-7,
                  progress_points=40, progress_min=2e-3, label="branch", fold_margin=0.05,
-                 turn_tol=1e-3, retrace_tol=0.1, corner_segments=(2, 4)):
+                 turn_tol=1e-3, retrace_tol=0.1, corner_segments=(2, 4), probe_after=3):
         self.p_min, self.p_max = p_min, p_max
         self.ds0, self.ds_min, self.ds_max = ds, ds_min, ds_max
         self.max_angle = max_angle
@@ -183,7 +187,9 @@ class Tracer:
         self.turn_tol = turn_tol
         self.retrace_tol = retrace_tol
         self.corner_segments = tuple(corner_segments)
-        self.n_evaluations = 0
+        self.probe_after = int(probe_after)
+        self.n_evaluations = 0  # flows asked for (with or without variational equations)
+        self.end_evaluations = 0  # of those, the ones the last trace spent after its last point
         self.debug = False
 
     # --- corrector ------------------------------------------------------------------------------
@@ -395,7 +401,7 @@ class Tracer:
         of travel t): 'discontinuous map', with a ContinuationWarning naming the parameter
         value, where the map jumps just ahead (``corners.map_jump``), else ``reason``."""
         jump = map_jump(prob, z, t)
-        self.n_evaluations += 6
+        self.n_evaluations += len(JUMP_HS)
         if jump is None:
             return reason
         h, r = jump
@@ -463,6 +469,7 @@ class Tracer:
         tfs = [self._tests(pt0)]
         retrace = Retrace(self.retrace_tol, prob.scale_u, prob.scale_p, prior)
         retrace.add(pt0, z, 0.0)
+        n_at_point = self.n_evaluations  # (end_evaluations: the work after the last point)
         located = []
         ds = self.ds0
         z_first = z.copy()
@@ -575,6 +582,16 @@ class Tracer:
                     jumped = True
                     ds = ds_ok
                     self._warn_unverified(prob, pts[-1].p, ptn.p)
+                if (not jumped and self.probe_after and n_fail % self.probe_after == 0
+                        and ds >= self.ds_min and pts[-1].problem is prob):
+                    # steps keep failing at this point: is the map discontinuous just ahead
+                    # (corners.map_jump, a few flows without variational equations)? Then no
+                    # shorter step, far-side solve or extra shooting segment goes on: end now
+                    # rather than after halving down to ds_min and trying them all
+                    jump_reason = self._jump_end(prob, pts[-1], z, t_in, "")
+                    if jump_reason:
+                        reason = jump_reason
+                        break
                 if not jumped:
                     if ds < self.ds_min or (budget is not None and budget <= 0):
                         if not (near_grazing or strict or budget is not None):
@@ -653,6 +670,7 @@ class Tracer:
             steps.append(float(np.linalg.norm(zn - z)))
             pts.append(pt)
             tfs.append(tf)
+            n_at_point = self.n_evaluations
             retrace.add(pt, zn, steps[-1])
             z, t = zn, tn
             t_in = t.copy()
@@ -734,6 +752,7 @@ class Tracer:
                 w, wp = prob.scale_u, prob.scale_p
                 t_in = t.copy()
         self.retrace = retrace
+        self.end_evaluations = self.n_evaluations - n_at_point
         return pts, located, reason
 
     # --- bifurcations on a step ---------------------------------------------------------------
