@@ -5,7 +5,7 @@ K = 2.1e8 N/m^1.5, e = 0.5), A = 0.1 mm, 5-150 Hz, orders 1 and 2, n_grid 20. Un
 
     python benchmarks/modal_diagram.py steps [--freqs 5.5,8,12.5,27,40,48] [--scales 1,2,4,8]
     python benchmarks/modal_diagram.py flows
-    python benchmarks/modal_diagram.py diagram [--out modal4.h5]   (about 1000 s CPU today)
+    python benchmarks/modal_diagram.py diagram [--out modal4.h5] [--accuracy off]
 
 - ``steps``: periodic orbits (order 1, found by integration to the steady state) solved at the
   default free-flight step times dt_scale (steps_per_contact 32 throughout) against the orbit at
@@ -15,7 +15,9 @@ K = 2.1e8 N/m^1.5, e = 0.5), A = 0.1 mm, 5-150 Hz, orders 1 and 2, n_grid 20. Un
   at dt_scale 1, 2, 4, with the steps taken and the impacts per period.
 - ``diagram``: the whole diagram with a progress line per branch (CPU seconds of this process
   in brackets); at the end the CPU per stage (brute-force grid, branches, error estimates),
-  the CPU of the branches by how they ended, and the diagram's warnings.
+  the CPU of the branches by how they ended, the flows the tracer asked for, and the
+  diagram's warnings. --accuracy: as the scene says (figures/modal_beam.toml: "off", no error
+  estimates; "default" for the estimates as well).
 
 Measured on main 97c7b7d (2026-11-24, 2 cores at load ~10, one run under cProfile, fresh
 kernel cache): 854 s CPU: brute-force grid 257 s, all but <= 10 s of it compiling the kernels;
@@ -37,7 +39,8 @@ from continuation.accuracy import match_multipliers
 
 AMPLITUDE, F_RANGE, ORDERS, N_GRID = 1e-4, (5.0, 150.0), (1, 2), 20
 GAVE_UP = ("stuck at a corner", "step underflow", "no progress", "max_points",
-           "discontinuous map", "could not move the segment boundaries")
+           "could not move the segment boundaries")  # (continuation.diagram._GAVE_UP)
+JUMP = "discontinuous map"
 
 
 def model():
@@ -96,7 +99,17 @@ def flows(freqs=(8.0, 27.0, 48.0)):
                   f"({cost[True] / cost[False]:.1f}x)")
 
 
-def diagram(out=None):
+def diagram(out=None, accuracy="off"):
+    from continuation.pathfollow import Tracer
+
+    tracers = []
+    init = Tracer.__init__
+
+    def counting_init(self, *a, **k):  # (to report the flows every tracer asked for)
+        init(self, *a, **k)
+        tracers.append(self)
+
+    Tracer.__init__ = counting_init
     t0 = time.process_time()
     log = []
 
@@ -108,8 +121,10 @@ def diagram(out=None):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         frc = continuation.frequency_response(model(), AMPLITUDE, F_RANGE, orders=ORDERS,
-                                              n_grid=N_GRID, progress=progress)
+                                              n_grid=N_GRID, progress=progress,
+                                              accuracy=accuracy)
     total = time.process_time() - t0
+    Tracer.__init__ = init
     stamps = [(float(re.match(r"\[\s*([\d.]+)\]", s).group(1)), s) for s in log]
     grid = next(t for t, s in stamps if "brute-force grid" in s)
     last_branch = max(t for t, s in stamps if "] branch " in s)
@@ -119,7 +134,8 @@ def diagram(out=None):
             prev = t if "brute-force grid" in s else prev
             continue
         ends = re.search(r"ends: (.*) / (.*) \(", s).groups()
-        key = "gave up at an end" if any(e in GAVE_UP for e in ends) else "ended cleanly"
+        key = ("gave up at an end" if any(e in GAVE_UP for e in ends) else
+               "ended at a discontinuous map" if JUMP in ends else "ended cleanly")
         n, c = by_end.get(key, (0, 0.0))
         by_end[key] = (n + 1, c + t - prev)
         prev = t
@@ -128,7 +144,12 @@ def diagram(out=None):
     for key, (n, c) in by_end.items():
         print(f"  {n} branches {key}: {c:.1f} s")
     print(f"{len(frc.branches)} branches, {frc.n_points} points, {len(frc.bifurcations)} "
-          "bifurcations")
+          f"bifurcations; the tracer asked for {sum(t.n_evaluations for t in tracers)} flows")
+    ends = [e for b in frc.branches for e, v in zip(b.ends, (b.values[0], b.values[-1]))
+            if F_RANGE[0] < v < F_RANGE[1]]
+    print(f"ends inside the range: {sum(e in GAVE_UP for e in ends)} where the tracer gave up, "
+          f"{ends.count(JUMP)} at a 'discontinuous map'; "
+          f"order 1 uncovered: {len(frc.uncovered(1))} intervals")
     for w in caught:
         print(f"{w.category.__name__}: {str(w.message)[:400]}")
     if out:
@@ -141,6 +162,7 @@ def main():
     ap.add_argument("--freqs", default="5.5,8,12.5,27,40,48")
     ap.add_argument("--scales", default="1,2,4,8")
     ap.add_argument("--out", default=None)
+    ap.add_argument("--accuracy", default="off")
     a = ap.parse_args()
     if a.what != "diagram":
         warnings.simplefilter("ignore")  # (the diagram's warnings are printed at its end)
@@ -149,7 +171,7 @@ def main():
     elif a.what == "flows":
         flows()
     else:
-        diagram(a.out)
+        diagram(a.out, a.accuracy)
 
 
 if __name__ == "__main__":

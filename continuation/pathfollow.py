@@ -11,7 +11,7 @@ from typing import Protocol
 import numpy as np
 
 from ._newton import ContinuationWarning, ConvergenceError
-from .corners import Retrace, check_crossing, far_side, map_jump, tangent
+from .corners import JUMP_HS, Retrace, check_crossing, far_side, map_jump, tangent
 
 KINDS = ("fold", "period-doubling", "neimark-sacker")  # from the test functions
 
@@ -143,7 +143,11 @@ class Tracer:
     turn_tol (a tangent's parameter component below this leaves the direction uncertain),
     retrace_tol (a point within this fraction of a segment's length of a traced segment
     re-enters it), corner_segments (shooting segments tried, in turn, at a corner that single
-    shooting cannot pass).
+    shooting cannot pass), probe_after (after this many failed steps in a row at one point,
+    and after every as many more, the map is probed for a jump just ahead, corners.map_jump,
+    at the cost of eight flows without variational equations: where it jumps, no shorter step,
+    far-side solve or extra segment can go on, and the branch ends there as 'discontinuous
+    map' at once; 0: only once every other way has failed).
 
     The corrector is a quasi-Newton iteration on the bordered system: the Jacobian at the
     predictor is dR/du from the variational equations (or, for a problem without them, the
@@ -160,7 +164,7 @@ class Tracer:
                  max_iter=10, jump_after=2, jump_steps=(1e-5, 1e-4, 1e-3), jump_max_distance=0.05,
                  grazing_iter=8, grazing_ds=0.01, contraction=0.7, noise_tol=1e-7,
                  progress_points=40, progress_min=2e-3, label="branch", fold_margin=0.05,
-                 turn_tol=1e-3, retrace_tol=0.1, corner_segments=(2, 4)):
+                 turn_tol=1e-3, retrace_tol=0.1, corner_segments=(2, 4), probe_after=3):
         self.p_min, self.p_max = p_min, p_max
         self.ds0, self.ds_min, self.ds_max = ds, ds_min, ds_max
         self.max_angle = max_angle
@@ -183,7 +187,9 @@ class Tracer:
         self.turn_tol = turn_tol
         self.retrace_tol = retrace_tol
         self.corner_segments = tuple(corner_segments)
-        self.n_evaluations = 0
+        self.probe_after = int(probe_after)
+        self.n_evaluations = 0  # flows asked for (with or without variational equations)
+        self.end_evaluations = 0  # of those, the ones the last trace spent after its last point
         self.debug = False
 
     # --- corrector ------------------------------------------------------------------------------
@@ -390,26 +396,49 @@ class Tracer:
             " steps_per_contact=64), multiple shooting from the start (segments=4), or a start "
             "beyond the corner (starts=...)", ContinuationWarning, stacklevel=3)
 
-    def _jump_end(self, prob, pt, z, t, reason):
+    def _jump_end(self, prob, pt, z, t, reason, jump=None):
         """The end reason of a branch whose steps failed at the point pt (z scaled, direction
         of travel t): 'discontinuous map', with a ContinuationWarning naming the parameter
-        value, where the map jumps just ahead (``corners.map_jump``), else ``reason``."""
-        jump = map_jump(prob, z, t)
-        self.n_evaluations += 6
+        value, where the map jumps just ahead (``corners.map_jump``, unless ``jump``, its
+        (h, |R|), is known), else ``reason``."""
+        if jump is None:
+            jump = map_jump(prob, z, t)
+            self.n_evaluations += len(JUMP_HS)
         if jump is None:
             return reason
         h, r = jump
         warnings.warn(
             f"continuation: the {self.label} ends at {prob.parameter} = {pt.p:.9g}: the "
             f"fixed-step flow map is discontinuous just beyond it (the residual jumps to "
-            f"{r:.1e} within {h:.0e} in scaled arclength, {pt.n_impacts} impacts per period "
-            "on both sides): a contact ends and restarts within a step, or its penetration dips "
+            f"{r:.1e} within {h:.0e} in scaled arclength; {pt.n_impacts} impacts per period "
+            "at the end): a contact ends and restarts within a step, or its penetration dips "
             "to zero and restarts (the Lankarani-Nikravesh law's onset-velocity memory resets "
             "there), so the orbits on the two sides are not joined by a continuous branch of the "
             "discrete map. Finer integration (dt_scale=0.5, steps_per_contact=64) moves or "
             "removes the jump; a start beyond it (starts=...) traces the far side",
             ContinuationWarning, stacklevel=3)
         return "discontinuous map"
+
+    def _jump_bracket(self, prob, z, t, lo, hi, r_hi, ratio=1.01):
+        """The largest scaled distance s along t from z known to lie before a jump of the map
+        between lo and hi (|R| at hi: r_hi): geometric bisection, flows without variational
+        equations, until hi / lo < ratio; a point whose |R| is below a tenth of r_hi lies
+        before the jump."""
+        w, wp = prob.scale_u, prob.scale_p
+        while hi / lo >= ratio:
+            mid = float(np.sqrt(lo * hi))
+            zm = z + mid * t
+            self.n_evaluations += 1
+            try:
+                ev = prob.evaluate(zm[:-1] * w, zm[-1] * wp, jac=False, jac_p=False)
+                before = float(np.max(np.abs(ev.R / w))) < 0.1 * r_hi
+            except ConvergenceError:
+                before = False
+            if before:
+                lo = mid
+            else:
+                hi = mid
+        return lo, hi
 
     def _warn_unverified(self, prob, p_a, p_b):
         warnings.warn(
@@ -463,6 +492,7 @@ class Tracer:
         tfs = [self._tests(pt0)]
         retrace = Retrace(self.retrace_tol, prob.scale_u, prob.scale_p, prior)
         retrace.add(pt0, z, 0.0)
+        n_at_point = self.n_evaluations  # (end_evaluations: the work after the last point)
         located = []
         ds = self.ds0
         z_first = z.copy()
@@ -483,6 +513,8 @@ class Tracer:
         avoid_until = 0  # avoid is cleared once the branch has this many points
         budget = None  # failed steps left with more shooting segments at a corner (None: any)
         far_failed = None  # (problem, scaled p) where the far-side solves last found nothing
+        approach = None  # (points, (h, |R|)): a step taken up to a located jump of the map
+        n_approach = 0
         while len(pts) < self.max_points:
             jumped = False
             crossing = None
@@ -492,6 +524,22 @@ class Tracer:
             seen = set()
             if len(pts) > avoid_until:
                 avoid = []
+            if approach is not None and len(pts) == approach[0] + 1:
+                # the step up to a located jump of the map was taken: probe again from there
+                approach = None
+                jump = map_jump(prob, z, t_in)
+                self.n_evaluations += len(JUMP_HS)
+                if jump is not None:
+                    if jump[0] > 1e-5 and n_approach < 3:
+                        s_lo, s_hi = self._jump_bracket(prob, z, t_in, 0.1 * jump[0], jump[0],
+                                                        jump[1])
+                        n_approach += 1
+                        approach = (len(pts), (s_hi, jump[1]))
+                        t = t_in.copy()
+                        ds = 0.98 * s_lo
+                    else:
+                        reason = self._jump_end(prob, pts[-1], z, t_in, "", jump)
+                        break
             strict = any(q is prob for q, _ in avoid)
             if not forced:
                 try:
@@ -575,6 +623,32 @@ class Tracer:
                     jumped = True
                     ds = ds_ok
                     self._warn_unverified(prob, pts[-1].p, ptn.p)
+                if approach is not None and len(pts) == approach[0]:
+                    # the step up to the located jump failed: the branch ends here
+                    reason = self._jump_end(prob, pts[-1], z, t_in, "", approach[1])
+                    break
+                if (not jumped and self.probe_after and n_fail % self.probe_after == 0
+                        and ds >= self.ds_min and pts[-1].problem is prob):
+                    # steps keep failing at this point: is the map discontinuous just ahead
+                    # (corners.map_jump, a few flows without variational equations)? Then no
+                    # shorter step, far-side solve or extra shooting segment goes on: rather
+                    # than halving down to ds_min and trying them all, the jump is bracketed
+                    # along the line (flows without variational equations) and one step taken
+                    # to just before it (up to three times, while it lies more than 1e-5
+                    # ahead); then the branch ends
+                    jump = map_jump(prob, z, t_in)
+                    self.n_evaluations += len(JUMP_HS)
+                    if jump is not None:
+                        if jump[0] > 1e-5 and n_approach < 3:
+                            s_lo, s_hi = self._jump_bracket(prob, z, t_in, 0.1 * jump[0],
+                                                            jump[0], jump[1])
+                            n_approach += 1
+                            approach = (len(pts), (s_hi, jump[1]))
+                            t = t_in.copy()
+                            ds = 0.98 * s_lo
+                            continue
+                        reason = self._jump_end(prob, pts[-1], z, t_in, "", jump)
+                        break
                 if not jumped:
                     if ds < self.ds_min or (budget is not None and budget <= 0):
                         if not (near_grazing or strict or budget is not None):
@@ -653,6 +727,7 @@ class Tracer:
             steps.append(float(np.linalg.norm(zn - z)))
             pts.append(pt)
             tfs.append(tf)
+            n_at_point = self.n_evaluations
             retrace.add(pt, zn, steps[-1])
             z, t = zn, tn
             t_in = t.copy()
@@ -686,6 +761,7 @@ class Tracer:
                 w, wp = prob.scale_u, prob.scale_p
                 z = np.r_[pts[-1].u / w, pts[-1].p / wp]
                 avoid_until = len(pts) + 10
+                approach = None
                 t = pts[-1].tangent if pts[-1].tangent is not None else t
                 t_in = t.copy()
                 forced = True
@@ -734,6 +810,7 @@ class Tracer:
                 w, wp = prob.scale_u, prob.scale_p
                 t_in = t.copy()
         self.retrace = retrace
+        self.end_evaluations = self.n_evaluations - n_at_point
         return pts, located, reason
 
     # --- bifurcations on a step ---------------------------------------------------------------

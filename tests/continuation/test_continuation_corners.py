@@ -249,6 +249,25 @@ def test_map_jump_tells_a_jump_from_a_steep_continuous_map():
             assert h * t[-1] > 3e-8 and h <= 1e-6 and r == pytest.approx(1e-2, rel=1e-3)
 
 
+def test_map_jump_finds_a_jump_a_few_steps_ahead_by_how_fast_the_residual_rises():
+    """A jump 5e-5 ahead (scaled) of a point where the smooth residual already grows like h:
+    |R| rises from ~1e-7 to 5e-3 over a decade of h and then stays flat; a sqrt corner at the
+    same place rises too, but keeps growing. The old rule (|R| >= 100 h) missed the jump."""
+    from continuation.corners import map_jump
+    t = np.array([1.0, 0.48, 1.0])
+    t /= np.linalg.norm(t)  # off the branch's tangent (u2' = 0.5): the residual grows like h
+    z = np.array([0.5, 0.125, 0.5])
+    for kind, expect in (("jump", True), ("sqrt", False)):
+        prob = Jump(0.5 + 5e-5, kind, jump=5e-3)
+        got = map_jump(prob, z, t)
+        assert (got is not None) == expect, (kind, got)
+        if expect:
+            h, r = got
+            assert h == 1e-4 and r == pytest.approx(5e-3, rel=0.05)
+            # the old rule alone (no rise test) does not see it
+            assert map_jump(prob, z, t, steep=np.inf) is None
+
+
 def test_branch_that_runs_onto_a_jump_of_the_map_says_so():
     """The tracer cannot pass a jump of the map (no continuous branch goes on): the branch
     ends there as 'discontinuous map' with a warning naming the value, not 'step underflow'.

@@ -1,0 +1,65 @@
+"""A branch of the 4-mode beam that runs onto a jump of its flow map (the Lankarani-Nikravesh
+onset-velocity memory resets where two contacts merge: 8 -> 7 impacts per period) ends there
+as 'discontinuous map', and finds out after a few failed steps, not after halving the step
+down to ds_min and trying multiple shooting (counted in flows, not timed)."""
+import warnings
+
+import numpy as np
+
+import continuation as C
+import nlbeam
+from continuation.corners import map_jump
+from continuation.diagram import _polish
+from continuation.pathfollow import Tracer
+from continuation.shooting import _problem_from_state
+
+A = 1e-4
+
+
+def _trace_down(f0=12.1, lo=12.0, **kw):
+    """The order-1 branch of ModalBeam.paper(n_modes=4) through f0 Hz, traced downwards (it
+    turns at a fold near 12.0067 Hz and runs up into the jump near 12.016 Hz)."""
+    model = nlbeam.ModalBeam.paper(n_modes=4)
+    sol = C.periodic_solution(model, A, f0)
+    prob, u0 = _problem_from_state(model, A, f0, 1, sol.state0, 1, C.Integrator())
+    prob, u, p = _polish(prob, u0, f0, 1e-10)
+    tr = Tracer(p_min=lo, p_max=f0 + 0.02, ds=0.02, ds_max=0.5, max_angle=0.2,
+                max_points=300, tol=1e-10, bif_tol=1e-8, **kw)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        pts, loc, reason = tr.trace(prob, u, p, direction=-1)
+    return tr, prob, pts, reason, caught
+
+
+def test_modal_branch_ends_at_the_jump_of_its_map_without_giving_up():
+    tr, prob, pts, reason, caught = _trace_down()
+    assert reason == "discontinuous map"
+    assert any("discontinuous just beyond" in str(w.message) for w in caught)
+    last = pts[-1]
+    assert 12.010 < last.p < 12.017  # past the fold at 12.0067 Hz, before the jump
+    assert min(q.p for q in pts) < 12.007
+    # the map does jump ahead of the last point: from the secant into the jump, |R| rises
+    # to ~1e-2 within 1e-3 (scaled) and stays there
+    w, wp = prob.scale_u, prob.scale_p
+    z1 = np.r_[pts[-2].u / w, pts[-2].p / wp]
+    z2 = np.r_[last.u / w, last.p / wp]
+    t = (z2 - z1) / np.linalg.norm(z2 - z1)
+    h, r = map_jump(prob, z2, t)
+    assert h <= 1e-3 and r > 1e-3
+    # counted work after the last point: a few failed steps, far-side solves and one probe
+    # (on main c6a4625 the same end cost 11 more halvings down to ds_min and 2- and
+    # 4-segment shooting first: 615 flows for the branch both ways against 350)
+    assert tr.end_evaluations <= 120, tr.end_evaluations
+
+
+def test_without_the_probe_the_same_end_costs_more_work():
+    """The probe is what saves the work: with probe_after=0 (the map is probed only once
+    every other way has failed) the branch creeps on towards the same jump with ever shorter
+    steps, each found by failed steps first, and ends there after more flows."""
+    tr0, _, pts0, reason0, _ = _trace_down(probe_after=0)
+    tr, _, pts, reason, _ = _trace_down()
+    assert reason0 == reason == "discontinuous map"
+    assert abs(pts0[-1].p - pts[-1].p) < 2e-3
+    print(f"flows: {tr0.n_evaluations} without the probe, {tr.n_evaluations} with it; "
+          f"points {len(pts0)}, {len(pts)}")
+    assert tr.n_evaluations < 0.75 * tr0.n_evaluations
