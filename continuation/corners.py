@@ -256,19 +256,34 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
                     return res
     for zs, evs in (reversed(sames) if tr._creeps < 3 else ()):
         # the furthest creep whose stretch is smooth: its multipliers moved by at most
-        # creep_mu_step from a's (a fixed-parameter jump over a cluster of corners or a fold
-        # pair that keeps the number of impacts lands on another sheet, and the bifurcations
-        # between would be lost), and the chord's midpoint lies on it (``joined``)
+        # creep_mu_step from a's, or every test function that changes sign on it has its root
+        # located on it (a fixed-parameter jump over a cluster of corners or a fold pair that
+        # keeps the number of impacts lands on another sheet, and the bifurcations between
+        # would be lost or misplaced), and the chord's midpoint lies on it (``joined``)
         if _lower_order(prob, a, zs):
             continue
         tr.complete_jacobian(prob, evs)
         b = tr._point(prob, zs, evs)
-        if mu_distance(a.multipliers, b.multipliers) > tr.creep_mu_step:
+        if (mu_distance(a.multipliers, b.multipliers) > tr.creep_mu_step
+                and not _smooth_events(tr, prob, a, b)):
             continue
         if joined(tr, prob, a, z_a, zs):
             tr._creeps += 1
             return zs, evs, b, None
     return None
+
+
+def _smooth_events(tr, prob, a, b):
+    """True when every test function (fold, period doubling, Neimark-Sacker) that changes sign
+    between the points a and b (one parameter step apart, the same number of impacts) has its
+    root located between them by fixed-parameter solves on one smooth stretch
+    (``Tracer.locate_p``: None where a solve fails or has another number of impacts)."""
+    ta, tb = tr._tests(a), tr._tests(b)
+    for k in range(len(ta)):
+        if np.sign(ta[k]) != np.sign(tb[k]) and tb[k] != 0:
+            if tr.locate_p(prob, a, b, k, ta[k], tb[k]) is None:
+                return False
+    return True
 
 
 def mu_distance(mu_a, mu_b):

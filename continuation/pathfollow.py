@@ -144,8 +144,9 @@ class Tracer:
     retrace_tol (a point within this fraction of a segment's length of a traced segment
     re-enters it), corner_segments (shooting segments tried, in turn, at a corner that single
     shooting cannot pass), creep_mu_step (a fixed-parameter creep towards a corner that keeps
-    the number of impacts is taken only where the multipliers moved by at most this; else a
-    shorter one: see ``corners.far_side``).
+    the number of impacts is taken only where the multipliers moved by at most this, or every
+    test function that changes sign on it is located on it; else a shorter one: see
+    ``corners.far_side``).
 
     The corrector is a quasi-Newton iteration on the bordered system: the Jacobian at the
     predictor is dR/du from the variational equations (or, for a problem without them, the
