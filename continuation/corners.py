@@ -209,6 +209,7 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
         return None if cr is None else (zs, evs, b, cr)
 
     far = [g[:-1] for g in guesses]
+    sames = []  # a's side going on beyond a: (zs, evs) at each distance, nearest first
     same_rel = 0.0  # the furthest relative distance beyond a where a's side goes on
     unit = max(abs(z_a[-1]), 1e-3)  # the distances are relative to a's parameter (scaled)
     for rel in tr.jump_steps:
@@ -223,6 +224,7 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
                 if np.max(np.abs(zs[:-1] - z_a[:-1])) <= tr.jump_max_distance:
                     same = (zs, evs)  # the corner lies further: the furthest one is kept
                     same_rel = rel
+                    sames.append(same)
                     break
                 continue
             res = candidate(zs, evs)
@@ -252,13 +254,45 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
                 res = candidate(zs, evs)
                 if res is not None:
                     return res
-    if (same is not None and tr._creeps < 3 and not _lower_order(prob, a, same[0])
-            and joined(tr, prob, a, z_a, same[0])):
-        tr._creeps += 1
-        zs, evs = same
+    for zs, evs in (reversed(sames) if tr._creeps < 3 else ()):
+        # the furthest creep whose stretch is smooth: its multipliers moved by at most
+        # creep_mu_step from a's, or every test function that changes sign on it has its root
+        # located on it (a fixed-parameter jump over a cluster of corners or a fold pair that
+        # keeps the number of impacts lands on another sheet, and the bifurcations between
+        # would be lost or misplaced), and the chord's midpoint lies on it (``joined``)
+        if _lower_order(prob, a, zs):
+            continue
         tr.complete_jacobian(prob, evs)
-        return zs, evs, tr._point(prob, zs, evs), None
+        b = tr._point(prob, zs, evs)
+        if (mu_distance(a.multipliers, b.multipliers) > tr.creep_mu_step
+                and not _smooth_events(tr, prob, a, b)):
+            continue
+        if joined(tr, prob, a, z_a, zs):
+            tr._creeps += 1
+            return zs, evs, b, None
     return None
+
+
+def _smooth_events(tr, prob, a, b):
+    """True when every test function (fold, period doubling, Neimark-Sacker) that changes sign
+    between the points a and b (one parameter step apart, the same number of impacts) has its
+    root located between them by fixed-parameter solves on one smooth stretch
+    (``Tracer.locate_p``: None where a solve fails or has another number of impacts)."""
+    ta, tb = tr._tests(a), tr._tests(b)
+    for k in range(len(ta)):
+        if np.sign(ta[k]) != np.sign(tb[k]) and tb[k] != 0:
+            if tr.locate_p(prob, a, b, k, ta[k], tb[k]) is None:
+                return False
+    return True
+
+
+def mu_distance(mu_a, mu_b):
+    """How far the Floquet multipliers moved between two points: the largest distance from a
+    multiplier of one set to the nearest of the other, both ways (0 where either is None)."""
+    if mu_a is None or mu_b is None:
+        return 0.0
+    d = np.abs(np.asarray(mu_a)[:, None] - np.asarray(mu_b)[None, :])
+    return float(max(d.min(axis=1).max(), d.min(axis=0).max()))
 
 
 def _lower_order(prob, a, zs):

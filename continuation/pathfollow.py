@@ -147,7 +147,10 @@ class Tracer:
     and after every as many more, the map is probed for a jump just ahead, corners.map_jump,
     at the cost of eight flows without variational equations: where it jumps, no shorter step,
     far-side solve or extra segment can go on, and the branch ends there as 'discontinuous
-    map' at once; 0: only once every other way has failed).
+    map' at once; 0: only once every other way has failed), creep_mu_step (a fixed-parameter
+    creep towards a corner that keeps the number of impacts is taken only where the
+    multipliers moved by at most this, or every test function that changes sign on it is
+    located on it; else a shorter one: see ``corners.far_side``).
 
     The corrector is a quasi-Newton iteration on the bordered system: the Jacobian at the
     predictor is dR/du from the variational equations (or, for a problem without them, the
@@ -164,8 +167,10 @@ class Tracer:
                  max_iter=10, jump_after=2, jump_steps=(1e-5, 1e-4, 1e-3), jump_max_distance=0.05,
                  grazing_iter=8, grazing_ds=0.01, contraction=0.7, noise_tol=1e-7,
                  progress_points=40, progress_min=2e-3, label="branch", fold_margin=0.05,
-                 turn_tol=1e-3, retrace_tol=0.1, corner_segments=(2, 4), probe_after=3):
+                 turn_tol=1e-3, retrace_tol=0.1, corner_segments=(2, 4), probe_after=3,
+                 creep_mu_step=0.25):
         self.p_min, self.p_max = p_min, p_max
+        self.creep_mu_step = creep_mu_step
         self.ds0, self.ds_min, self.ds_max = ds, ds_min, ds_max
         self.max_angle = max_angle
         self.max_points = max_points
