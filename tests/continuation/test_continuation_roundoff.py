@@ -297,3 +297,55 @@ def test_refinement_status_and_record_are_saved(tmp_path):
     assert np.array_equal(la.refined.seconds, a.refined.seconds)
     assert lb.refined is None and lb.refine_status == b.refine_status
     assert lc.refined is None and lc.refine_status == ""
+
+
+# --- the overlap check: decided by re-solving the traced branch, not by where a point falls ---
+def test_overlap_check_is_confirmed_by_a_re_solve_of_the_branch():
+    """A point within the geometric allowances of a traced branch (2e-3 relative plus a
+    twentieth of the segment; state within 5 % of the orbit's size) is on it only when the
+    branch re-solved there (same_orbit) lands on the point's orbit: two different orbits can
+    lie that close (the paper model's order-3 branches near 111-113 Hz), and which point of a
+    trace first falls inside the allowances is up to round-off. At most two segments per
+    branch are re-solved; outside the allowances nothing is."""
+    from types import SimpleNamespace
+
+    from continuation.diagram import _on_branch
+    st = np.array([[1e-4, 0.0], [1.06e-4, 0.0]])
+    br = SimpleNamespace(order=1, frequency=np.array([10.0, 11.0]),
+                         xmax=np.array([1e-4, 1.06e-4]), state0=st, ends=("", ""))
+    calls = []
+
+    def said(answer):
+        return lambda b, i, lam: calls.append((b, i, lam)) or answer
+    f, x_chord = 10.5, 1.03e-4
+    for off, inside in ((1.001, True), (1.05, False)):
+        x = x_chord * off
+        shifts = np.array([[x, 0.0]])
+        assert _on_branch([br], 1, f, x, shifts) == (0 if inside else None)
+        calls.clear()
+        assert _on_branch([br], 1, f, x, shifts, same_orbit=said(True)) == (0 if inside
+                                                                             else None)
+        assert len(calls) == (1 if inside else 0)
+        if calls:  # segment 0, where the point projects onto it
+            assert calls[0][0] is br and calls[0][1] == 0 and 0.4 < calls[0][2] < 0.6
+        assert _on_branch([br], 1, f, x, shifts, same_orbit=said(False)) is None
+
+
+def test_same_orbit_test_recognises_the_orbit_and_rejects_another():
+    """The re-solve (paper model, order 1): the branch through 39.8 and 40.2 Hz re-solved at 40
+    Hz from its interpolated state lands on the orbit at 40 Hz (True); judged against a state
+    5 % off that orbit (not an orbit of the map) it says False."""
+    from types import SimpleNamespace
+
+    from continuation.diagram import _same_orbit_test
+    from continuation.shooting import Integrator, _problem_from_state
+    m = nlbeam.BeamImpact.paper()
+    sols = [C.periodic_solution(m, 1e-4, f) for f in (39.8, 40.0, 40.2)]
+    br = SimpleNamespace(order=1, frequency=np.array([39.8, 40.2]),
+                         xmax=np.array([sols[0].xmax, sols[2].xmax]),
+                         state0=np.array([sols[0].state0, sols[2].state0]), ends=("", ""))
+    s0 = np.asarray(sols[1].state0, dtype=float)
+    prob, u = _problem_from_state(m, 1e-4, 40.0, 1, s0, 1, Integrator())
+    u, ev, res, it = prob.solve(u, 40.0)
+    assert _same_orbit_test(prob, u, 40.0)(br, 0, 0.5)
+    assert not _same_orbit_test(prob, u * 1.05, 40.0)(br, 0, 0.5)
