@@ -473,7 +473,8 @@ def _trace_switched(tracer, pt, order, branches=(), pd_values=(), overlap=None):
 
 def _overlap_stop(branches, order, skip=0):
     """A stop rule: the point has run onto an already traced branch of the same order (checked
-    from the ``skip``-th point on)."""
+    from the ``skip``-th point on): 'overlap' (Tracer.trace then lists the step's
+    bifurcations), else False."""
     count = [0]
 
     def stop(pt):
@@ -481,9 +482,10 @@ def _overlap_stop(branches, order, skip=0):
         if count[0] <= skip:
             return False
         m_, A_, f = pt.problem.setup(pt.p)
-        return _on_branch(branches, order, f, pt.xmax,
-                          lambda: _shifted_states(pt.problem, pt.u, pt.p),
-                          same_orbit=_same_orbit_test(pt.problem, pt.u, pt.p)) is not None
+        hit = _on_branch(branches, order, f, pt.xmax,
+                         lambda: _shifted_states(pt.problem, pt.u, pt.p),
+                         same_orbit=_same_orbit_test(pt.problem, pt.u, pt.p))
+        return "overlap" if hit is not None else False
     return stop
 
 
@@ -517,7 +519,8 @@ def _shifted_states(prob, u, p):
 
 
 def _either(*rules):
-    return lambda pt: any(r(pt) for r in rules)
+    """A stop rule: the first true answer of ``rules`` (e.g. 'overlap'), else False."""
+    return lambda pt: next((a for a in (r(pt) for r in rules) if a), False)
 
 
 def _same_point(a, b, rel=1e-6):

@@ -340,7 +340,7 @@ def test_same_orbit_test_recognises_the_orbit_and_rejects_another():
     from continuation.diagram import _same_orbit_test
     from continuation.shooting import Integrator, _problem_from_state
     m = nlbeam.BeamImpact.paper()
-    sols = [C.periodic_solution(m, 1e-4, f) for f in (39.8, 40.0, 40.2)]
+    sols = [C.periodic_solution(m, 1e-4, f, error=False) for f in (39.8, 40.0, 40.2)]
     br = SimpleNamespace(order=1, frequency=np.array([39.8, 40.2]),
                          xmax=np.array([sols[0].xmax, sols[2].xmax]),
                          state0=np.array([sols[0].state0, sols[2].state0]), ends=("", ""))
