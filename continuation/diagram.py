@@ -315,7 +315,12 @@ def _on_branch(branches, order, f, xmax, state0, rel=2e-3, state_rel=0.05, same_
         ok = np.nonzero(dist <= allow)[0]
         shifts = None
         tried = 0
-        for i in ok[np.argsort(dist[ok] / allow[ok], kind="stable")]:
+        # (with the re-solve: segments that reach f within rel first, nearest first: from a
+        # segment farther off in frequency the re-solve is not made, see _same_orbit_test)
+        near_f = ((np.minimum(fb[:-1], fb[1:]) <= f * (1 + rel))
+                  & (f * (1 - rel) <= np.maximum(fb[:-1], fb[1:])))
+        key = dist[ok] / allow[ok] + (0.0 if same_orbit is None else 10.0 * ~near_f[ok])
+        for i in ok[np.argsort(key, kind="stable")]:
             if (past_last and lam[i] >= 1.0) or (past_first and lam[i] <= 0.0):
                 continue
             s_b = b.state0[i] + lam[i] * (b.state0[i + 1] - b.state0[i])
@@ -340,10 +345,12 @@ def _on_branch(branches, order, f, xmax, state0, rel=2e-3, state_rel=0.05, same_
 def _same_orbit_test(prob, u, p, rel=1e-5):
     """callable(branch, i, lam) -> bool for ``_on_branch``: Newton at p (a frequency) on a copy
     of prob (the candidate orbit u's problem), started from the branch's state at t = 0
-    interpolated on its segment i (at f where the segment spans it, else at lam), lands on the
+    interpolated on its segment i (at p where the segment spans it, else at lam), lands on the
     orbit u (its state at t = 0 within ``rel`` of the orbit's size, seen from any excitation
-    period); False where Newton fails. (For another continued parameter, always True: the
-    allowances decide, as before.)"""
+    period); False where Newton fails or the segment ends farther than 2e-3 (relative, the
+    allowance) from p in frequency (a point beyond a branch's end or fold by more is judged at
+    a later step). (For another continued parameter, always True: the allowances decide, as
+    before.)"""
     if prob.parameter != "frequency":
         return lambda b, i, lam: True
     got = {}
@@ -357,6 +364,9 @@ def _same_orbit_test(prob, u, p, rel=1e-5):
             got["sc"] = np.r_[np.full(N, xs), np.full(N, xs * 2 * np.pi * p / P.order)]
         P = got["prob"]
         f0, f1 = float(b.frequency[i]), float(b.frequency[i + 1])
+        if not (min(f0, f1) <= p * (1 + 2e-3) and p * (1 - 2e-3) <= max(f0, f1)):
+            return False  # from a state of the branch 0.5 Hz off (the paper model's order 3
+            # at 112.008 Hz) Newton landed on the point's orbit in one run, not in another
         if min(f0, f1) <= p <= max(f0, f1) and f1 != f0:
             lam = (p - f0) / (f1 - f0)  # the branch's state at this frequency
         s = b.state0[i] + lam * (b.state0[i + 1] - b.state0[i])
