@@ -1,6 +1,7 @@
 """Frequency-response diagrams: branches of every order, their bifurcations, save and load."""
 from __future__ import annotations
 
+import copy
 import inspect
 import time
 import warnings
@@ -282,7 +283,7 @@ def _both_ways(tracer, prob, u, p, stop=None):
     return pts, loc_b + loc_f, (reason_b, reason)
 
 
-def _on_branch(branches, order, f, xmax, state0, rel=2e-3, state_rel=0.05):
+def _on_branch(branches, order, f, xmax, state0, rel=2e-3, state_rel=0.05, same_orbit=None):
     """Index of a traced branch of this order through the solution (f Hz, xmax m, state0: its
     states at t = k / f, k = 0..order-1 (the same orbit seen from each excitation period), or a
     callable giving them), or None. The point must lie within ``rel`` (relative, plus a
@@ -290,7 +291,14 @@ def _on_branch(branches, order, f, xmax, state0, rel=2e-3, state_rel=0.05):
     t = 0 within ``state_rel`` of the state interpolated there (in units of the orbit's size).
     Past an end where the map jumps ('discontinuous map') the branch does not go on: there a
     point nearest to a segment's end (not between its ends) is the orbit on the jump's far
-    side, not on the branch."""
+    side, not on the branch.
+    same_orbit: callable(branch, i, lam) -> bool (``_same_orbit_test``), the branch re-solved at
+    f from segment i (lam: where the point projects onto it) and compared with the solution:
+    it then decides every point that passes those allowances (at most the two nearest segments
+    of each branch). Two different orbits can lie within the allowances (the paper model's
+    order-3 branches near 111-113 Hz: xmax within 1 %, multipliers 0.3 against 0.5), and which
+    point of a trace first falls inside them is up to round-off; the re-solve's answer has a
+    margin (the same orbit to the corrector's tolerance, 1e-8, or another one, > 1e-3)."""
     for bi, b in enumerate(branches):
         if b.order != order or len(b.frequency) < 2:
             continue
@@ -303,9 +311,16 @@ def _on_branch(branches, order, f, xmax, state0, rel=2e-3, state_rel=0.05):
         L2 = dF ** 2 + dX ** 2
         lam = np.clip(-(F[:-1] * dF + X[:-1] * dX) / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
         dist = np.hypot(F[:-1] + lam * dF, X[:-1] + lam * dX)
-        ok = np.nonzero(dist <= rel + 0.05 * np.sqrt(L2))[0]
+        allow = rel + 0.05 * np.sqrt(L2)
+        ok = np.nonzero(dist <= allow)[0]
         shifts = None
-        for i in ok:
+        tried = 0
+        # (with the re-solve: segments that reach f within rel first, nearest first: from a
+        # segment farther off in frequency the re-solve is not made, see _same_orbit_test)
+        near_f = ((np.minimum(fb[:-1], fb[1:]) <= f * (1 + rel))
+                  & (f * (1 - rel) <= np.maximum(fb[:-1], fb[1:])))
+        key = dist[ok] / allow[ok] + (0.0 if same_orbit is None else 10.0 * ~near_f[ok])
+        for i in ok[np.argsort(key, kind="stable")]:
             if (past_last and lam[i] >= 1.0) or (past_first and lam[i] <= 0.0):
                 continue
             s_b = b.state0[i] + lam[i] * (b.state0[i + 1] - b.state0[i])
@@ -315,9 +330,56 @@ def _on_branch(branches, order, f, xmax, state0, rel=2e-3, state_rel=0.05):
             N = shifts.shape[1] // 2
             w = 2 * np.pi * f / order
             sc = np.r_[np.full(N, xmax), np.full(N, xmax * w)]
-            if np.min(np.max(np.abs(shifts - s_b) / sc, axis=1)) <= state_rel:
+            if np.min(np.max(np.abs(shifts - s_b) / sc, axis=1)) > state_rel:
+                continue
+            if same_orbit is None:
+                return bi
+            if tried >= 2:
+                break
+            tried += 1
+            if same_orbit(b, i, float(lam[i])):
                 return bi
     return None
+
+
+def _same_orbit_test(prob, u, p, rel=1e-5):
+    """callable(branch, i, lam) -> bool for ``_on_branch``: Newton at p (a frequency) on a copy
+    of prob (the candidate orbit u's problem), started from the branch's state at t = 0
+    interpolated on its segment i (at p where the segment spans it, else at lam), lands on the
+    orbit u (its state at t = 0 within ``rel`` of the orbit's size, seen from any excitation
+    period); False where Newton fails or the segment ends farther than 2e-3 (relative, the
+    allowance) from p in frequency (a point beyond a branch's end or fold by more is judged at
+    a later step). (For another continued parameter, always True: the allowances decide, as
+    before.)"""
+    if prob.parameter != "frequency":
+        return lambda b, i, lam: True
+    got = {}
+
+    def same(b, i, lam):
+        if not got:  # the candidate's states, once
+            got["prob"] = P = copy.copy(prob)
+            got["shifts"] = sh = _shifted_states(P, u, p)
+            N = P.N2 // 2
+            xs = max(float(np.max(np.abs(sh[:, :N]))), 1e-300)
+            got["sc"] = np.r_[np.full(N, xs), np.full(N, xs * 2 * np.pi * p / P.order)]
+        P = got["prob"]
+        f0, f1 = float(b.frequency[i]), float(b.frequency[i + 1])
+        if not (min(f0, f1) <= p * (1 + 2e-3) and p * (1 - 2e-3) <= max(f0, f1)):
+            return False  # from a state of the branch 0.5 Hz off (the paper model's order 3
+            # at 112.008 Hz) Newton landed on the point's orbit in one run, not in another
+        if min(f0, f1) <= p <= max(f0, f1) and f1 != f0:
+            lam = (p - f0) / (f1 - f0)  # the branch's state at this frequency
+        s = b.state0[i] + lam * (b.state0[i + 1] - b.state0[i])
+        try:
+            model, ex = P.forcing(p)
+            U = [s if b0 == 0 else P.flow_phases(model, ex, s, 0.0, b0).state
+                 for b0 in P.boundaries]
+            u2, ev, res, it = P.solve(np.ravel(U), p)
+            s2 = P.state_at_zero(u2, p)[0]
+        except (ConvergenceError, nlbeam.IntegrationError, np.linalg.LinAlgError, ValueError):
+            return False
+        return bool(np.min(np.max(np.abs(got["shifts"] - s2) / got["sc"], axis=1)) <= rel)
+    return same
 
 
 def _switch(tracer, pt, order):
@@ -421,7 +483,8 @@ def _trace_switched(tracer, pt, order, branches=(), pd_values=(), overlap=None):
 
 def _overlap_stop(branches, order, skip=0):
     """A stop rule: the point has run onto an already traced branch of the same order (checked
-    from the ``skip``-th point on)."""
+    from the ``skip``-th point on): 'overlap' (Tracer.trace then lists the step's
+    bifurcations), else False."""
     count = [0]
 
     def stop(pt):
@@ -429,8 +492,10 @@ def _overlap_stop(branches, order, skip=0):
         if count[0] <= skip:
             return False
         m_, A_, f = pt.problem.setup(pt.p)
-        return _on_branch(branches, order, f, pt.xmax,
-                          lambda: _shifted_states(pt.problem, pt.u, pt.p)) is not None
+        hit = _on_branch(branches, order, f, pt.xmax,
+                         lambda: _shifted_states(pt.problem, pt.u, pt.p),
+                         same_orbit=_same_orbit_test(pt.problem, pt.u, pt.p))
+        return "overlap" if hit is not None else False
     return stop
 
 
@@ -441,7 +506,8 @@ def _traced_already(branches, pts, order):
     for q in pts:
         m_, A_, f = q.problem.setup(q.p)
         bi = _on_branch(branches, order, f, q.xmax,
-                        lambda q=q: _shifted_states(q.problem, q.u, q.p))
+                        lambda q=q: _shifted_states(q.problem, q.u, q.p),
+                        same_orbit=_same_orbit_test(q.problem, q.u, q.p))
         if bi is None:
             return False
         hits.add(bi)
@@ -463,7 +529,8 @@ def _shifted_states(prob, u, p):
 
 
 def _either(*rules):
-    return lambda pt: any(r(pt) for r in rules)
+    """A stop rule: the first true answer of ``rules`` (e.g. 'overlap'), else False."""
+    return lambda pt: next((a for a in (r(pt) for r in rules) if a), False)
 
 
 def _same_point(a, b, rel=1e-6):
@@ -586,7 +653,8 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
     def on_branch(order, f, sol_prob, u, p):
         ev = sol_prob.evaluate(u, p, jac=False, jac_p=False)
         return _on_branch(branches, order, f, ev.xmax,
-                          lambda: _shifted_states(sol_prob, u, p)) is not None
+                          lambda: _shifted_states(sol_prob, u, p),
+                          same_orbit=_same_orbit_test(sol_prob, u, p)) is not None
 
     def trace_from(f, order, sol_prob, u, p, origin, key=None):
         """The branch through the polished start (sol_prob, u, p), unless it lies on a traced

@@ -457,7 +457,10 @@ class Tracer:
     def trace(self, prob, u0, p0, direction=1, stop=None, t0=None, prior=None):
         """Follow the branch through the solution (u0, p0) in the direction of increasing p
         (direction=1) or decreasing p (-1), or along t0 (scaled tangent) if given.
-        ``stop(point) -> bool`` ends the branch (the point is kept). prior: the other half of
+        ``stop(point) -> bool`` ends the branch (the point is kept; where it returns 'overlap',
+        the point lies on a branch traced before, the bifurcations on the step to it are
+        detected first: which step of a trace runs onto the other branch is up to round-off,
+        a fold or period doubling on it is not). prior: the other half of
         the branch (``Retrace.export()`` of its trace from the same first point), so that a
         half that runs onto the other is caught. The predictor follows the secant through the
         last two points (the Jacobian's tangent at the first), and the step adapts to the angle
@@ -708,7 +711,8 @@ class Tracer:
                     g_tol = max(g_tol, crossing.gap * prob.scale_p
                                 * max(abs(t_in[-1]), abs(crossing.t_far[-1])))
                 grazing = (crossing.hi, g_tol, crossing.lo, None)
-            if stop is not None and stop(pt):
+            stopped = stop(pt) if stop is not None else False
+            if stopped and stopped != "overlap":
                 pts.append(pt)
                 tfs.append(tf)
                 reason = "stop"
@@ -729,6 +733,11 @@ class Tracer:
                         found.append(Located("fold", ext, g_tol, len(pts) - 1,
                                              note=_jump_note("fold", prev, pt)))
                 located += found
+            if stopped:  # ran onto a traced branch: the step's bifurcations are listed too
+                pts.append(pt)
+                tfs.append(tf)
+                reason = "stop"
+                break
             steps.append(float(np.linalg.norm(zn - z)))
             pts.append(pt)
             tfs.append(tf)
