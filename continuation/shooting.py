@@ -25,7 +25,7 @@ from nlbeam.integrate import FlowMap
 from nlbeam.parameters import get_parameter, with_parameter
 from nlbeam._validate import choice, positive, real_array
 from nlbeam.summary import Summary, field_rows
-from nlbeam.solver import STEPS_PER_CONTACT, Solver, period_step, phase_step
+from nlbeam.solver import Solver, period_step, phase_step
 from nlbeam.vocabulary import METHODS as METHOD_NAMES
 
 from ._newton import ConvergenceError, ContinuationWarning, newton
@@ -38,22 +38,13 @@ def forcing(amplitude, frequency):
     return nlbeam.Harmonic(amplitude, frequency)
 
 
-#: steps per contact of periodic orbits by default, as a multiple of nlbeam's default
-#: (nlbeam.solver.STEPS_PER_CONTACT): the multipliers' error at nlbeam's default comes from
-#: the contact steps (paper model, 10.5-60 Hz: halving dt leaves it, twice the contact steps
-#: cut it 8-50x, from up to 1.1e-4 to 7e-6 and below, at 1.3-1.4x the cost of a flow)
-CONTACT_STEPS_FACTOR = 2
-
-
 @dataclass(frozen=True)
 class Integrator:
     """How orbits are integrated. method: 'rk4', 'rk2' or 'adaptive' (rtol, atol).
     dt_scale: the fixed step as a fraction of nlbeam's default (1: default; 0.5: half the step).
     The number of steps per excitation period is kept fixed in steps of powers of two, so the
-    discrete flow map is smooth along a branch. steps_per_contact: as in nlbeam.flow; None:
-    ``CONTACT_STEPS_FACTOR`` times nlbeam's default for the fixed-step methods (64 for rk4,
-    192 for rk2; set here), nlbeam's default for 'adaptive'. The step decisions are those of
-    ``solver`` (nlbeam.solver.Solver)."""
+    discrete flow map is smooth along a branch. steps_per_contact: as in nlbeam.flow. The step
+    decisions are those of ``solver`` (nlbeam.solver.Solver)."""
 
     method: str = "rk4"
     dt_scale: float = 1.0
@@ -64,10 +55,6 @@ class Integrator:
     def __post_init__(self):
         choice("method", self.method, METHOD_NAMES)
         positive("dt_scale", self.dt_scale)
-        if self.steps_per_contact is None and self.method in STEPS_PER_CONTACT \
-                and self.method != "adaptive":
-            object.__setattr__(self, "steps_per_contact",
-                               float(CONTACT_STEPS_FACTOR * STEPS_PER_CONTACT[self.method]))
         _ = self.solver  # a Solver checks steps_per_contact, rtol, atol
 
     @functools.cached_property

@@ -15,7 +15,6 @@ import nlbeam
 from continuation.accuracy import combine, match_multipliers
 from continuation.refine import locate_extended
 from continuation.shooting import Integrator
-from nlbeam.solver import STEPS_PER_CONTACT
 
 FINE = Integrator(dt_scale=1 / 16, steps_per_contact=512)
 PAPER = nlbeam.BeamImpact.paper()
@@ -97,23 +96,6 @@ def test_orbit_error_estimates_bound_the_true_error(name, model, amplitude, f, o
     # ...and is not a vacuous bound: within a factor 10 of it (observed 1.5-2.1)
     assert sol.xmax_error <= 10 * true_x + 1e-12 * xm
     assert np.max(sol.multipliers_error) <= 10 * np.max(true_mu) + 1e-9
-
-
-@pytest.mark.parametrize("name, model, amplitude, f", [
-    ("paper, 12 Hz", PAPER, 1e-4, 12.0),
-    ("paper, 20 Hz", PAPER, 1e-4, 20.0),
-    ("paper, 60 Hz", PAPER, 1e-4, 60.0),
-    ("2-DOF hertz, 15 Hz", TWO_DOF, 1e-4, 15.0),
-    ("pwl stop, 1.0 Hz", PWL, 1.0, 1.0),
-])
-def test_default_multipliers_meet_1e_5(name, model, amplitude, f):
-    """At the default integrator (no refinement asked for) the multipliers are within 1e-5 of
-    the converged ones (issue 13 item 5). With nlbeam's 32 steps per contact they were not:
-    1.1e-4 (paper, 12 Hz), 2.2e-5 (60 Hz), 1.2e-5 (2-DOF, 15 Hz)."""
-    sol = C.periodic_solution(model, amplitude, f, error=False)
-    assert sol.integrator.steps_per_contact == 2 * STEPS_PER_CONTACT["rk4"]
-    _, mu = converged(model, amplitude, f, 1, sol)
-    assert np.max(np.abs(sol.multipliers - match_multipliers(sol.multipliers, mu))) <= 1e-5
 
 
 def test_periodic_solution_meets_the_accuracy_asked_for():
