@@ -253,6 +253,25 @@ def test_peaks_table_stops_at_f_max(tmp_path):
     assert len(got) == 2 and got[0] == 40.0 and math.isclose(got[1], 3224.0, abs_tol=0.5)
 
 
+def test_moments_table_states_how_rough_its_errors_are(tmp_path):
+    """A moments row prints each moment to the digits of its standard error and gives the
+    errors' degrees of freedom (se_dof); a record without them leaves the cell empty."""
+    from nlbeam.app.scenes.outputs import write_table
+
+    mo = {"mean": -9.245293e-4, "std": 7.3966e-4, "skewness": -1.03312, "kurtosis": 4.1032,
+          "se_mean": 7.4967e-6, "se_std": 8.5e-6, "se_skewness": 0.034, "se_kurtosis": 0.19,
+          "se_dof": 8.68695652}
+    rows = []
+    for dof in (mo["se_dof"], math.nan):
+        sto = SimpleNamespace(moments=lambda ch, dof=dof: dict(mo, se_dof=dof))
+        variants = [("", {}, {}, {}, None, sto, {"stochastic": "b"})]
+        write_table({"kind": "moments", "file": "m.csv"}, variants, tmp_path)
+        rows += list(csv.DictReader(open(tmp_path / "m.csv")))
+    assert rows[0]["se_dof"] == "8.7" and rows[1]["se_dof"] == ""
+    assert rows[0]["kurtosis"] == "4.10" and rows[0]["se_kurtosis"] == "0.19"
+    assert float(rows[0]["mean"]) == pytest.approx(mo["mean"], abs=mo["se_mean"] / 10)
+
+
 def test_a_default_written_out_keys_the_same_analysis(tmp_path):
     # paper_broadband.toml spells the paper's contact parameters out, paper_narrowband.toml
     # leaves them: both must find the one diagram in the cache

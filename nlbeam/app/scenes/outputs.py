@@ -45,7 +45,7 @@ def _by_variant(scene, jobs, results):
 # the header of a table with no rows (e.g. a diagram without bifurcations)
 _EMPTY_COLUMNS = {
     "moments": ["variant", "channel", "mean", "std", "skewness", "kurtosis", "se_mean",
-                "se_std", "se_skewness", "se_kurtosis"],
+                "se_std", "se_skewness", "se_kurtosis", "se_dof"],
     "peaks": ["variant", "channel", "frequency_hz", "prominence_dec", "kind", "order",
               "branch_frequency_hz", "stable", "distance_hz", "tolerance_hz", "xmax_m", "note",
               "explained_by_hz"],
@@ -231,6 +231,9 @@ def write_table(d, variants, out_dir, measured=None, swept=None):
                 if key in row and e is not None and math.isfinite(e) and e > 0:
                     row[key] = with_error(row[key], e / 10)
                     row[f"se_{key}"] = f"{e:.2g}"
+            # how rough the errors themselves are (about +-1/sqrt(2 dof) relative)
+            dof = mo.get("se_dof", math.nan)
+            row["se_dof"] = f"{dof:.2g}" if math.isfinite(dof) else ""
             rows.append(row)
         elif kind == "peaks":
             f_max = d.get("f_max", default_f_max(p, s))
