@@ -260,16 +260,15 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
         # located on it (a fixed-parameter jump over a cluster of corners or a fold pair that
         # keeps the number of impacts lands on another sheet, and the bifurcations between
         # would be lost or misplaced), and the chord's midpoint lies on it (``joined``)
-        if _lower_order(prob, a, zs):
+        if _lower_order(prob, a, zs) or not joined(tr, prob, a, z_a, zs):
             continue
         tr.complete_jacobian(prob, evs)
         b = tr._point(prob, zs, evs)
         if (mu_distance(a.multipliers, b.multipliers) > tr.creep_mu_step
                 and not _smooth_events(tr, prob, a, b)):
             continue
-        if joined(tr, prob, a, z_a, zs):
-            tr._creeps += 1
-            return zs, evs, b, None
+        tr._creeps += 1
+        return zs, evs, b, None
     return None
 
 

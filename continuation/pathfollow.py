@@ -523,6 +523,7 @@ class Tracer:
         far_failed = None  # (problem, scaled p) where the far-side solves last found nothing
         approach = None  # (points, (h, |R|)): a step taken up to a located jump of the map
         n_approach = 0
+        pending_end = None  # a located jump of the map where the branch ends (far side first)
         while len(pts) < self.max_points:
             jumped = False
             crossing = None
@@ -545,6 +546,11 @@ class Tracer:
                         approach = (len(pts), (s_hi, jump[1]))
                         t = t_in.copy()
                         ds = 0.98 * s_lo
+                    elif self.jump_steps:
+                        # the far side has not been tried from this point: before the branch
+                        # ends at the jump, it is (a jump of the map can be a jump of the
+                        # branch, with fixed points beyond it)
+                        pending_end, forced = jump, True
                     else:
                         reason = self._jump_end(prob, pts[-1], z, t_in, "", jump)
                         break
@@ -621,9 +627,9 @@ class Tracer:
                         far_failed = (prob, z[-1])
                     forced = False
                 last = self.unverified
+                far = (last is not None and last[0] is prob and last[1] is pts[-1])
                 if (not jumped and (ds < self.ds_min or (budget is not None and budget <= 0))
-                        and (near_grazing or strict) and last is not None
-                        and last[0] is prob and last[1] is pts[-1]):
+                        and (near_grazing or strict) and far):
                     # every strategy failed, but a far-side solution passed the checks except
                     # that the bisection joining it could not be finished: taken, loudly
                     zn, evn, ptn, crossing = last[2]
@@ -631,10 +637,24 @@ class Tracer:
                     jumped = True
                     ds = ds_ok
                     self._warn_unverified(prob, pts[-1].p, ptn.p)
-                if approach is not None and len(pts) == approach[0]:
-                    # the step up to the located jump failed: the branch ends here
-                    reason = self._jump_end(prob, pts[-1], z, t_in, "", approach[1])
-                    break
+                if not jumped and approach is not None and len(pts) == approach[0]:
+                    pending_end = approach[1]  # the step up to the located jump failed
+                if not jumped and pending_end is not None:
+                    if not tried_jump and self.jump_steps:
+                        forced = True  # the far side first (next pass), then the end
+                        continue
+                    if not far:
+                        reason = self._jump_end(prob, pts[-1], z, t_in, "", pending_end)
+                        break
+                    # a far-side solution beyond the jump passed every check but the
+                    # bisection joining it (which a jump of the map cannot finish): taken,
+                    # loudly
+                    zn, evn, ptn, crossing = last[2]
+                    tn = ptn.tangent = crossing.t_far
+                    jumped = True
+                    ds = ds_ok
+                    self._warn_unverified(prob, pts[-1].p, ptn.p)
+                pending_end = None
                 if (not jumped and self.probe_after and n_fail % self.probe_after == 0
                         and ds >= self.ds_min and pts[-1].problem is prob):
                     # steps keep failing at this point: is the map discontinuous just ahead
@@ -655,8 +675,17 @@ class Tracer:
                             t = t_in.copy()
                             ds = 0.98 * s_lo
                             continue
-                        reason = self._jump_end(prob, pts[-1], z, t_in, "", jump)
-                        break
+                        if not tried_jump and self.jump_steps:
+                            pending_end, forced = jump, True  # the far side first
+                            continue
+                        if not far:
+                            reason = self._jump_end(prob, pts[-1], z, t_in, "", jump)
+                            break
+                        zn, evn, ptn, crossing = last[2]  # as above: taken, loudly
+                        tn = ptn.tangent = crossing.t_far
+                        jumped = True
+                        ds = ds_ok
+                        self._warn_unverified(prob, pts[-1].p, ptn.p)
                 if not jumped:
                     if ds < self.ds_min or (budget is not None and budget <= 0):
                         if not (near_grazing or strict or budget is not None):
