@@ -38,13 +38,24 @@ def forcing(amplitude, frequency):
     return nlbeam.Harmonic(amplitude, frequency)
 
 
+#: steps per contact of periodic orbits when none are given, per method: rk4 1.5 times
+#: nlbeam's 32. The multipliers' error at nlbeam's default is the contact steps' (halving dt
+#: leaves it): paper model, order 1, median stated error at the diagram's sampled points above
+#: 9.9 Hz 2.3e-5 at 32, 5.4e-6 at 48, 2.5e-6 at 64; the paper diagram costs about the same at
+#: 48 and 2.6x at 64 (docs/continuation_report.md, "Default steps per contact"). rk2 keeps
+#: nlbeam's 96 (its multipliers are off by 1e-4 and more at any affordable count).
+CONTACT_STEPS = {"rk4": 48.0}
+
+
 @dataclass(frozen=True)
 class Integrator:
     """How orbits are integrated. method: 'rk4', 'rk2' or 'adaptive' (rtol, atol).
     dt_scale: the fixed step as a fraction of nlbeam's default (1: default; 0.5: half the step).
     The number of steps per excitation period is kept fixed in steps of powers of two, so the
-    discrete flow map is smooth along a branch. steps_per_contact: as in nlbeam.flow. The step
-    decisions are those of ``solver`` (nlbeam.solver.Solver)."""
+    discrete flow map is smooth along a branch. steps_per_contact: as in nlbeam.flow; None:
+    ``CONTACT_STEPS`` for the method (rk4 48, set here), else nlbeam's default
+    (nlbeam.solver.STEPS_PER_CONTACT: rk2 96). The step decisions are those of ``solver``
+    (nlbeam.solver.Solver)."""
 
     method: str = "rk4"
     dt_scale: float = 1.0
@@ -55,6 +66,8 @@ class Integrator:
     def __post_init__(self):
         choice("method", self.method, METHOD_NAMES)
         positive("dt_scale", self.dt_scale)
+        if self.steps_per_contact is None and self.method in CONTACT_STEPS:
+            object.__setattr__(self, "steps_per_contact", CONTACT_STEPS[self.method])
         _ = self.solver  # a Solver checks steps_per_contact, rtol, atol
 
     @functools.cached_property
