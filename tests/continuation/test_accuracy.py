@@ -185,6 +185,23 @@ def test_period_doubling_frequency_error_covers_the_converged_value(pd_diagram):
     assert abs(bf.levels[0] - ref) > 10 * bf.tolerance
 
 
+def test_diagram_states_its_accuracy(pd_diagram):
+    """The diagram's summary states the multipliers' error at the sampled branch points and
+    the fold / PD frequencies' (FrequencyResponse.stated_accuracy), from the estimates it
+    carries; nothing without them (accuracy='off')."""
+    e = np.concatenate([b.multipliers_error[b.error_sampled] for b in pd_diagram.branches])
+    line = pd_diagram.stated_accuracy()
+    assert e.size >= 2 and f"multipliers median {np.median(e):.1e}" in line
+    assert f"largest {np.max(e):.1e}" in line
+    assert f"{int(np.sum(e > 1e-5))} of {e.size} sampled points above 1e-5" in line
+    rel = [b.error / b.frequency for b in pd_diagram.bifurcations
+           if b.kind in ("fold", "period-doubling")]
+    assert rel and f"median relative {np.median(rel):.1e}" in line
+    assert "stated errors" in repr(pd_diagram)
+    off = dataclasses.replace(pd_diagram, settings={**pd_diagram.settings, "accuracy": "off"})
+    assert off.stated_accuracy() == "" and "stated errors" not in repr(off)
+
+
 def test_high_accuracy_gives_eight_digits_without_a_separate_refine(pd_diagram):
     """accuracy 8 digits on the same period doubling; reference: continuation.refine (the
     extended system at dt / 4 .. dt / 32, Richardson; 9.7 digits)."""
