@@ -38,13 +38,12 @@ def forcing(amplitude, frequency):
     return nlbeam.Harmonic(amplitude, frequency)
 
 
-#: steps per contact of periodic orbits when none are given, per method: rk4 1.5 times
-#: nlbeam's 32. The multipliers' error at nlbeam's default is the contact steps' (halving dt
-#: leaves it): paper model, order 1, median stated error at the diagram's sampled points above
-#: 9.9 Hz 2.3e-5 at 32, 5.4e-6 at 48, 2.5e-6 at 64; the paper diagram costs about the same at
-#: 48 and 2.6x at 64 (docs/continuation_report.md, "Default steps per contact"). rk2 keeps
-#: nlbeam's 96 (its multipliers are off by 1e-4 and more at any affordable count).
-CONTACT_STEPS = {"rk4": 48.0}
+#: steps per contact of periodic orbits when none are given, per method (else nlbeam's
+#: default, nlbeam.solver.STEPS_PER_CONTACT: rk4 32, rk2 96). Empty: 48 for rk4 was measured
+#: (multipliers' median stated error on the paper diagram's harmonic branch 2.3e-5 -> 5.4e-6
+#: for 7 % more CPU) but not made the default: at 48 two closed-form tests fail
+#: (docs/continuation_report.md, "Default steps per contact"); steps_per_contact=48 asks for it.
+CONTACT_STEPS = {}
 
 
 @dataclass(frozen=True)
@@ -53,9 +52,9 @@ class Integrator:
     dt_scale: the fixed step as a fraction of nlbeam's default (1: default; 0.5: half the step).
     The number of steps per excitation period is kept fixed in steps of powers of two, so the
     discrete flow map is smooth along a branch. steps_per_contact: as in nlbeam.flow; None:
-    ``CONTACT_STEPS`` for the method (rk4 48, set here), else nlbeam's default
-    (nlbeam.solver.STEPS_PER_CONTACT: rk2 96). The step decisions are those of ``solver``
-    (nlbeam.solver.Solver)."""
+    ``CONTACT_STEPS`` for the method if it names one (set here), else nlbeam's default
+    (nlbeam.solver.STEPS_PER_CONTACT: rk4 32, rk2 96). The step decisions are those of
+    ``solver`` (nlbeam.solver.Solver)."""
 
     method: str = "rk4"
     dt_scale: float = 1.0

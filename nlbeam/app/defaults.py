@@ -93,8 +93,7 @@ HELP = {
                   "deterministic (the paper's method)",
 }
 #: what a default of None means (the analysis derives the value)
-DERIVED = {"steps_per_contact": "32 for rk4, 96 for rk2 (nlbeam.solver); periodic orbits: 48 "
-           "for rk4 (continuation.Integrator)", "accuracy": "'default'",
+DERIVED = {"steps_per_contact": "the solver's", "accuracy": "'default'",
            "lowpass": "none", "transient": "10 decay times of the slowest mode "
            "(stochastic.simulate)", "psd_resolution": "max(0.05, 16 / duration) "
            "(stochastic.simulate)", "dt": "1 / (32 f_max of the noise)"}
