@@ -2,9 +2,9 @@
 
 Paper model, A = 0.1 mm, order-1 orbits: the error of the multipliers (largest over the
 orbit's, absolute) against dt / 8 with 256 steps per contact, at nlbeam's 32 steps per contact
-(continuation's default until session 8), with dt halved there, and with 48 (continuation's
-default since), 64, 96, 128 steps per contact; and the CPU time of one evaluation of the
-shooting residual with its monodromy relative to the one at 32.
+(continuation's default), with dt halved there, and with 48 (the measured candidate default,
+docs/continuation_report.md), 64, 96, 128 steps per contact; and the CPU time of one
+evaluation of the shooting residual with its monodromy relative to the one at 32.
 
     python benchmarks/multiplier_error_sources.py [f1 f2 ...]   (Hz; default 10.5 12 20 40 60)
 """
