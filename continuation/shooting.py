@@ -41,7 +41,7 @@ def forcing(amplitude, frequency):
 #: steps per contact of periodic orbits when none are given, per method (else nlbeam's
 #: default, nlbeam.solver.STEPS_PER_CONTACT: rk4 32, rk2 96). Empty: 48 for rk4 was measured
 #: (multipliers' median stated error on the paper diagram's harmonic branch 2.3e-5 -> 5.4e-6
-#: for 7 % more CPU) but not made the default: at 48 one stated error of an exact-pwl test
+#: for 7-14 % more CPU) but not made the default: at 48 one stated error of an exact-pwl test
 #: is exceeded (docs/continuation_report.md, "Default steps per contact");
 #: steps_per_contact=48 asks for it.
 CONTACT_STEPS = {}
