@@ -1,9 +1,10 @@
 """Benchmark (not a test): where the Floquet multipliers' error at the defaults comes from.
 
 Paper model, A = 0.1 mm, order-1 orbits: the error of the multipliers (largest over the
-orbit's, absolute) against dt / 8 with 256 steps per contact, at the defaults (rk4, 32 steps
-per contact), with dt halved, and with 48, 64, 96, 128 steps per contact; and the CPU time of
-one evaluation of the shooting residual with its monodromy relative to the default's.
+orbit's, absolute) against dt / 8 with 256 steps per contact, at nlbeam's 32 steps per contact
+(continuation's default), with dt halved there, and with 48 (the measured candidate default,
+docs/continuation_report.md), 64, 96, 128 steps per contact; and the CPU time of one
+evaluation of the shooting residual with its monodromy relative to the one at 32.
 
     python benchmarks/multiplier_error_sources.py [f1 f2 ...]   (Hz; default 10.5 12 20 40 60)
 """
@@ -25,7 +26,9 @@ from continuation.shooting import Integrator, _problem_from_state  # noqa: E402
 
 A = 1e-4
 REFERENCE = Integrator(dt_scale=1 / 8, steps_per_contact=256)
-VARIANTS = [("default", Integrator()), ("dt / 2", Integrator(dt_scale=0.5))] + [
+BASE = Integrator(steps_per_contact=32)
+VARIANTS = [("32 per contact", BASE),
+            ("dt / 2", Integrator(dt_scale=0.5, steps_per_contact=32))] + [
     (f"{n} per contact", Integrator(steps_per_contact=n)) for n in (48, 64, 96, 128)]
 
 
@@ -44,10 +47,10 @@ def main(freqs):
     warnings.simplefilter("ignore", RuntimeWarning)
     model = nlbeam.BeamImpact.paper()
     for f in freqs:
-        s0 = C.periodic_solution(model, A, f, error=False)
+        s0 = C.periodic_solution(model, A, f, integrator=BASE, error=False)
         ref = C.periodic_solution(model, A, f, guess=s0, integrator=REFERENCE,
                                   error=False).multipliers
-        c0 = cost(model, f, Integrator(), s0)
+        c0 = cost(model, f, BASE, s0)
         cells = []
         for name, integ in VARIANTS:
             s = C.periodic_solution(model, A, f, guess=s0, integrator=integ, error=False)

@@ -204,8 +204,40 @@ class FrequencyResponse(Summary):
             gaps = self.uncovered(1)
             rows.append(("order 1 uncovered", "none" if not gaps else ", ".join(
                 f"{a:g}..{b:g}" for a, b in gaps)))
+        acc = self.stated_accuracy()
+        if acc:
+            rows.append(("stated errors", acc))
         rows += [("wall_time [s]", f"{self.wall_time:.3g}"), ("version", str(self.version))]
         return rows
+
+    def stated_accuracy(self):
+        """One line on the error estimates (accuracy=, continuation.accuracy), '' without
+        them: the multipliers' stated error at the sampled branch points (median, the largest
+        and where, how many above 1e-5) and the fold / period-doubling / Neimark-Sacker
+        frequencies' (median relative error, how many not estimated)."""
+        if self.settings.get("accuracy") == "off":
+            return ""
+        mu = [(float(e), float(v)) for b in self.branches
+              if b.multipliers_error is not None and b.error_sampled is not None
+              for e, v in zip(b.multipliers_error[b.error_sampled], b.values[b.error_sampled])]
+        rel = [abs(b.error / b.value) if b.value else b.error for b in self.bifurcations
+               if b.kind in ("fold", "period-doubling", "neimark-sacker")
+               and getattr(b, "error", None) is not None]
+        parts = []
+        if mu:
+            e = np.array([m for m, _ in mu])
+            k = int(np.argmax(e))
+            parts.append(f"multipliers median {np.median(e):.1e}, largest {e[k]:.1e} at "
+                         f"{mu[k][1]:.6g}, {int(np.sum(e > 1e-5))} of {e.size} sampled "
+                         f"points above 1e-5")
+        if rel:
+            r = np.array(rel, dtype=float)
+            ok = np.isfinite(r)
+            if ok.any():
+                parts.append(f"fold/PD/NS {self.parameter} median relative "
+                             f"{np.median(r[ok]):.1e}" + (f", {int(np.sum(~ok))} not estimated"
+                                                         if not ok.all() else ""))
+        return "; ".join(parts)
 
     def save(self, path):
         """Write to HDF5 (atomically: a temporary file in the same folder, then os.replace;

@@ -38,13 +38,24 @@ def forcing(amplitude, frequency):
     return nlbeam.Harmonic(amplitude, frequency)
 
 
+#: steps per contact of periodic orbits when none are given, per method (else nlbeam's
+#: default, nlbeam.solver.STEPS_PER_CONTACT: rk4 32, rk2 96). Empty: 48 for rk4 was measured
+#: (multipliers' median stated error on the paper diagram's harmonic branch 2.3e-5 -> 5.4e-6
+#: for 7-14 % more CPU) but not made the default: at 48 one stated error of an exact-pwl test
+#: is exceeded (docs/continuation_report.md, "Default steps per contact");
+#: steps_per_contact=48 asks for it.
+CONTACT_STEPS = {}
+
+
 @dataclass(frozen=True)
 class Integrator:
     """How orbits are integrated. method: 'rk4', 'rk2' or 'adaptive' (rtol, atol).
     dt_scale: the fixed step as a fraction of nlbeam's default (1: default; 0.5: half the step).
     The number of steps per excitation period is kept fixed in steps of powers of two, so the
-    discrete flow map is smooth along a branch. steps_per_contact: as in nlbeam.flow. The step
-    decisions are those of ``solver`` (nlbeam.solver.Solver)."""
+    discrete flow map is smooth along a branch. steps_per_contact: as in nlbeam.flow; None:
+    ``CONTACT_STEPS`` for the method if it names one (set here), else nlbeam's default
+    (nlbeam.solver.STEPS_PER_CONTACT: rk4 32, rk2 96). The step decisions are those of
+    ``solver`` (nlbeam.solver.Solver)."""
 
     method: str = "rk4"
     dt_scale: float = 1.0
@@ -55,6 +66,8 @@ class Integrator:
     def __post_init__(self):
         choice("method", self.method, METHOD_NAMES)
         positive("dt_scale", self.dt_scale)
+        if self.steps_per_contact is None and self.method in CONTACT_STEPS:
+            object.__setattr__(self, "steps_per_contact", CONTACT_STEPS[self.method])
         _ = self.solver  # a Solver checks steps_per_contact, rtol, atol
 
     @functools.cached_property

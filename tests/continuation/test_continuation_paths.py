@@ -74,8 +74,9 @@ def test_period_doubling_switches_to_period_2T(pd_diagram):
     f = b.frequency[i]
     ex = nlbeam.Harmonic(1e-4, f)
     n = 100 * int(np.ceil(np.max(m.natural_frequencies()) / f))
-    one = nlbeam.flow(m, ex, b.state0[i], 0.0, 1 / f, dt=1 / (f * n))
-    two = nlbeam.flow(m, ex, b.state0[i], 0.0, 2 / f, dt=1 / (f * n))
+    spc = C.Integrator().steps_per_contact  # the diagram's contact steps: the same map
+    one = nlbeam.flow(m, ex, b.state0[i], 0.0, 1 / f, dt=1 / (f * n), steps_per_contact=spc)
+    two = nlbeam.flow(m, ex, b.state0[i], 0.0, 2 / f, dt=1 / (f * n), steps_per_contact=spc)
     scale = np.abs(b.state0[i])
     assert np.max(np.abs(two.state - b.state0[i]) / scale) < 1e-6  # period 2T
     assert np.max(np.abs(one.state - b.state0[i]) / scale) > 1e-3  # but not T

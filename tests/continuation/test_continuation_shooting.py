@@ -75,7 +75,8 @@ def test_stable_solution_agrees_with_brute_force(f, order):
     assert abs(fl.xmax[0] - sol.xmax) < 1e-5 * sol.xmax
     # the reported state at t = 0 lies on the orbit: one period maps it onto itself
     sol_back = nlbeam.flow(m, nlbeam.Harmonic(A, f), sol.state0, 0.0, order / f,
-                           disc0=sol.disc0, dt=1 / (f * n))
+                           disc0=sol.disc0, dt=1 / (f * n),
+                           steps_per_contact=sol.integrator.steps_per_contact)
     assert np.max(np.abs(sol_back.state - sol.state0) / np.abs(sol.states).max(axis=0)) < 1e-6
 
 
