@@ -4,7 +4,7 @@ from .codes import ERR_EVENT
 from .excite import excite, excite_yyd
 from .field import kinematics
 from .hook import njit
-from .steps import rk_step
+from .steps import rk_step_free
 
 
 # --- dense output: quintic Hermite in x through (x, v, a) at both ends -------------------------
@@ -65,8 +65,8 @@ def step_extrema(s0, f0, s1, f1, h, N, xmax):
 def delta_after(meth, t, tau, s, P, dvm, disc, e, sign, level, sysa, xc, xp, xtab, f0,
                 s_out, P_out, KS, KP, ytmp, Ptmp, fel, err_w):
     """sign * delta_e after one step of length tau from (t, s); status in the second slot."""
-    st = rk_step(meth, t, tau, s, P, dvm, disc, False, sysa, xc, xp, xtab, f0,
-                 s_out, P_out, KS, KP, ytmp, Ptmp, fel, err_w)
+    st = rk_step_free(meth, t, tau, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, P_out, KS,
+                      KP, ytmp, Ptmp, fel, err_w)
     if st != 0:
         return 0.0, st
     y, yd, ydd, st = excite(t + tau, xc, xp, xtab)

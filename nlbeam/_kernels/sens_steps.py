@@ -18,7 +18,7 @@ from .codes import (_R3, _R6, _RA21, _RA31, _RA32, _RA41, _RA42, _RA43, _RC1, _R
 from .excite import excite
 from .field import _deriv_var_at_t, deriv, field_dt, kinematics
 from .hook import _HAS_USER, njit
-from .steps import rk_step, tableau
+from .steps import rk_step_with_var, tableau
 
 SR_T = 0      # d t / d z of the current time t
 SR_TN = 1     # d t / d z at the step's end (written by rk_step_sens)
@@ -389,27 +389,27 @@ def rk_step_sens(meth, mode, u0, hu, t_ref, e, s, tcur, P, dvm, disc, sysa, xc, 
 
 
 @njit(cache=True)
-def var_time_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0, s_out, P_out,
-                  KS, KP, KT, ytmp, Ptmp, fel, err_w, ft, SR, row_t):
-    """rk_step over h from (t, s); with want_var the sensitivities too, by rk_step_sens where
-    the start time or the length depends on the state (rows row_t, SR_H of SR not zero), and
-    SR[SR_TN] = d t / d z at the step's end. Status."""
-    if want_var:
-        m = P.shape[1]
-        fixed_ends = True
-        for c in range(m):
-            if SR[row_t, c] != 0.0 or SR[SR_H, c] != 0.0:
-                fixed_ends = False
-        if not fixed_ends:
-            # (phase and element as int64, not literals: the loop's own copy of rk_step_sens)
-            st, tn = rk_step_sens(meth, np.int64(0), 0.0, h, 0.0, np.int64(-1), s, t, P, dvm,
-                                  disc, sysa, xc, xp, xtab, s_out, P_out, KS, KP, KT, ytmp, Ptmp,
-                                  fel, ft, err_w, SR, row_t)
-            return st
-        for c in range(m):
-            SR[SR_TN, c] = 0.0
-    return rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0, s_out, P_out,
-                   KS, KP, ytmp, Ptmp, fel, err_w)
+def var_time_step(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, P_out, KS, KP, KT,
+                  ytmp, Ptmp, fel, err_w, ft, SR, row_t):
+    """rk_step over h from (t, s) with the variational equations, by rk_step_sens where the
+    start time or the length depends on the state (rows row_t, SR_H of SR not zero), and
+    SR[SR_TN] = d t / d z at the step's end. Status. (Without them the loop calls
+    ``rk_step_free``: the same step.)"""
+    m = P.shape[1]
+    fixed_ends = True
+    for c in range(m):
+        if SR[row_t, c] != 0.0 or SR[SR_H, c] != 0.0:
+            fixed_ends = False
+    if not fixed_ends:
+        # (phase and element as int64, not literals: the loop's own copy of rk_step_sens)
+        st, tn = rk_step_sens(meth, np.int64(0), 0.0, h, 0.0, np.int64(-1), s, t, P, dvm,
+                              disc, sysa, xc, xp, xtab, s_out, P_out, KS, KP, KT, ytmp, Ptmp,
+                              fel, ft, err_w, SR, row_t)
+        return st
+    for c in range(m):
+        SR[SR_TN, c] = 0.0
+    return rk_step_with_var(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, P_out,
+                            KS, KP, ytmp, Ptmp, fel, err_w)
 
 
 @njit(cache=True)

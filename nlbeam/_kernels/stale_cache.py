@@ -4,15 +4,20 @@ numba keys a cached kernel by the timestamp and size of the file that defines it
 files whose functions it inlines: after ``excite.py`` changes, ``loop.py``'s cached
 ``integrate_kernel`` would still run the old excitation code. Before any kernel is compiled or
 loaded, the SHA-256 of every kernel source (and the Python and numba versions) is compared with
-the stamp left in ``__pycache__``; if they differ, the cached ``*.nbi``/``*.nbc`` files there
-are removed, so every kernel compiles again from the sources it is built from.
-Standard library only; a read-only install (nothing can be removed or stamped) is left as is.
+the stamp left in the folder where numba keeps this package's cache; if they differ, the cached
+``*.nbi``/``*.nbc`` files there are removed, so every kernel compiles again from the sources it
+is built from. That folder is the one numba's own cache locator picks for a file of this
+package: ``$NUMBA_CACHE_DIR/<package folder>_<hash>`` when NUMBA_CACHE_DIR is set, else the
+package's ``__pycache__`` if writable, else numba's per-user cache folder. A folder where
+nothing can be removed or stamped is left as is (numba then cannot write there either).
 """
 from __future__ import annotations
 
 import hashlib
+import inspect
 import os
 import sys
+import warnings
 from pathlib import Path
 
 STAMP = "kernel_sources.sha256"
@@ -55,13 +60,31 @@ def drop_stale(cache_dir, sources, extra=()):
     return removed
 
 
+def numba_cache_dir(func):
+    """The folder in which numba caches the kernels of ``func``'s source file, found by numba's
+    own cache locator (it honours NUMBA_CACHE_DIR and NUMBA_CACHE_LOCATOR_CLASSES, and creates
+    the folder, as numba does for every cached kernel). A RuntimeWarning and the in-tree
+    ``__pycache__`` if this numba has no such locator (a renamed internal)."""
+    try:
+        from numba.core import caching
+        return Path(caching.CompileResultCacheImpl(func).locator.get_cache_path())
+    except Exception as exc:  # an internal API: a numba that moved it must not stop the import
+        fallback = Path(inspect.getfile(func)).resolve().parent / "__pycache__"
+        warnings.warn(f"nlbeam: numba's cache locator is not available ({exc!r}); the stale-"
+                      f"kernel check covers only {fallback}. If kernels misbehave after an "
+                      "update, delete numba's cache folder (NUMBA_CACHE_DIR if set)",
+                      RuntimeWarning, stacklevel=2)
+        return fallback
+
+
 def check_package():
-    """The check for this package's kernels (called once, when ``nlbeam._kernels`` loads)."""
+    """The check for this package's kernels (called once, when ``nlbeam._kernels`` loads), in
+    the folder numba caches them in (``numba_cache_dir``)."""
     here = Path(__file__).resolve().parent
     try:
         import numba
         numba_version = numba.__version__
     except ImportError:  # pragma: no cover - numba is a dependency
         numba_version = "?"
-    return drop_stale(here / "__pycache__", sorted(here.glob("*.py")),
+    return drop_stale(numba_cache_dir(check_package), sorted(here.glob("*.py")),
                       extra=(sys.version, numba_version))

@@ -194,6 +194,41 @@ def rk_step(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0,
         # only call deriv, are not compiled: about 15 s less to compile, uncached)
         return _rk_step_var(t, h, s, P, dvm, disc, sysa, xc, xp, xtab, s_out, P_out, KS, KP, ytmp,
                             Ptmp, fel)
+    return _rk_step_tableau(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0, s_out,
+                            P_out, KS, KP, ytmp, Ptmp, fel, err_w)
+
+
+@njit(cache=True)
+def rk_step_free(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, P_out, KS, KP,
+                 ytmp, Ptmp, fel, err_w):
+    """``rk_step`` without the variational equations (want_var False; P and dvm are not read):
+    the same calls, so the same doubles. A kernel that calls only this compiles none of the
+    variational steps (numba types both sides of rk_step's branch on want_var: ~1/3 of the
+    plain loop's first compile went to steps it never takes)."""
+    if meth != RK2:
+        return _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, KS, KP,
+                              ytmp, fel, err_w)
+    return _rk_step_tableau(meth, t, h, s, P, dvm, disc, False, sysa, xc, xp, xtab, f0, s_out,
+                            P_out, KS, KP, ytmp, Ptmp, fel, err_w)
+
+
+@njit(cache=True)
+def rk_step_with_var(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, P_out, KS, KP,
+                     ytmp, Ptmp, fel, err_w):
+    """``rk_step`` with the variational equations (want_var True): the same calls, so the same
+    doubles, without the plain steps' code to compile."""
+    if not _HAS_USER and meth == RK4:
+        return _rk_step_var(t, h, s, P, dvm, disc, sysa, xc, xp, xtab, s_out, P_out, KS, KP, ytmp,
+                            Ptmp, fel)
+    return _rk_step_tableau(meth, t, h, s, P, dvm, disc, True, sysa, xc, xp, xtab, f0, s_out,
+                            P_out, KS, KP, ytmp, Ptmp, fel, err_w)
+
+
+@njit(cache=True)
+def _rk_step_tableau(meth, t, h, s, P, dvm, disc, want_var, sysa, xc, xp, xtab, f0, s_out, P_out,
+                     KS, KP, ytmp, Ptmp, fel, err_w):
+    """``rk_step`` by the tableau loops (RK2; DP5 with the variational equations; every method
+    with a custom force). Returns status."""
     A, B, BH, Cc = tableau(meth)
     ns = B.shape[0]
     n = s.shape[0]

@@ -1,5 +1,9 @@
 """numba's kernel caches are dropped when any kernel source changes (numba itself keys a cache by
 the defining file only, so a kernel that inlines an edited function would run the old code)."""
+import os
+import subprocess
+import sys
+import textwrap
 from pathlib import Path
 
 import nlbeam._kernels as kernels
@@ -52,7 +56,7 @@ def test_a_read_only_cache_folder_is_left_alone(tmp_path):
 
 def test_the_package_stamp_is_the_digest_of_todays_kernel_sources():
     here = Path(kernels.__file__).resolve().parent
-    stamp = here / "__pycache__" / stale_cache.STAMP
+    stamp = stale_cache.numba_cache_dir(stale_cache.check_package) / stale_cache.STAMP
     if not stamp.exists():  # a read-only install: nothing to check
         return
     import sys
@@ -61,3 +65,62 @@ def test_the_package_stamp_is_the_digest_of_todays_kernel_sources():
     digest = stale_cache.sources_digest(sorted(here.glob("*.py")),
                                         extra=(sys.version, numba.__version__))
     assert stamp.read_text().strip() == digest
+
+
+def test_the_guarded_folder_is_numbas_cache_folder_under_NUMBA_CACHE_DIR(tmp_path, monkeypatch):
+    from numba.core import config
+    here = Path(kernels.__file__).resolve().parent
+    monkeypatch.setattr(config, "CACHE_DIR", "")
+    assert stale_cache.numba_cache_dir(stale_cache.check_package) == here / "__pycache__"
+    monkeypatch.setattr(config, "CACHE_DIR", str(tmp_path / "numba"))
+    folder = stale_cache.numba_cache_dir(stale_cache.check_package)
+    assert folder.parent == tmp_path / "numba" and folder.name.startswith("_kernels_")
+
+
+# a kernel that calls a jitted function of another file, and the package's guard in front
+_HELPER = "from numba import njit\n\n\n@njit(cache=True)\ndef value():\n    return {}\n"
+_KERNEL = textwrap.dedent("""\
+    import sys
+    from numba import njit
+    if sys.argv[1] == "guarded":
+        import stale_cache
+        stale_cache.check_package()
+    from helper import value
+
+
+    @njit(cache=True)
+    def kernel():
+        return value() + 0
+
+
+    print(kernel())
+""")
+
+
+def test_a_kernel_compiled_from_an_edited_helper_is_not_loaded_from_NUMBA_CACHE_DIR(tmp_path):
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "stale_cache.py").write_text(Path(stale_cache.__file__).read_text())
+    (pkg / "kern.py").write_text(_KERNEL)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"),
+               PYTHONDONTWRITEBYTECODE="1")
+
+    def run(helper_value, how):
+        (pkg / "helper.py").write_text(_HELPER.format(helper_value))
+        out = subprocess.run([sys.executable, "kern.py", how], cwd=pkg, env=env, check=True,
+                             capture_output=True, text=True).stdout
+        return int(out.split()[-1])
+
+    assert run(1, "unguarded") == 1
+    assert not (pkg / "__pycache__").exists() or not list((pkg / "__pycache__").glob("*.nbi"))
+    # numba alone keys kern.kernel by kern.py, unchanged: the old helper's value comes back
+    assert run(2, "unguarded") == 1
+    # the guard (in the folder numba uses: under NUMBA_CACHE_DIR) drops it
+    assert run(3, "guarded") == 3
+    folder, = (tmp_path / "numba").glob("pkg_*")
+    assert (folder / stale_cache.STAMP).exists()
+    cached = {p: p.stat().st_mtime_ns for p in folder.glob("kern.kernel-*.nb*")}
+    assert len(cached) == 2
+    assert run(3, "guarded") == 3   # a cache that is current is loaded, not written again
+    assert {p: p.stat().st_mtime_ns for p in folder.glob("kern.kernel-*.nb*")} == cached
+    assert run(4, "guarded") == 4
