@@ -162,6 +162,27 @@ def check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict):
     return Crossing(lo, hi, z_lo, z_hi, abs(hi.p - lo.p), gap, t_far, turn, connected)
 
 
+def smooth_fold_beside(tr, a, crossing, b):
+    """Does the step from a to b across a corner also pass a smooth fold, on the near side
+    (between a and the bracket's near end ``crossing.lo``, both with a's number of impacts) or
+    on the far side (between ``crossing.hi`` and b)? Then a real multiplier passed +1 on a
+    smooth stretch: the sign of prod(mu - 1) differs between the two points of that stretch,
+    where ``fold_sign`` trusts both (no real multiplier within ``tr.fold_margin`` of +1). A
+    turn of such a step is the smooth fold's, not the corner's, and the step is too long to
+    place either (the paper model at 9.3339 Hz: a step from 9.33459 to 9.33552 Hz passed the
+    grazing point 9.33421 and the fold 9.333877 behind it, and the grazing point was put at
+    9.33376, beyond the fold, where the branch has no point). Sides the bisection did not
+    reach (lo is a, or hi is b) tell nothing."""
+    for p, q in ((a, crossing.lo), (crossing.hi, b)):
+        if p is q:
+            continue
+        s_p, ok_p = fold_sign(p, tr.fold_margin)
+        s_q, ok_q = fold_sign(q, tr.fold_margin)
+        if ok_p and ok_q and s_p != s_q:
+            return True
+    return False
+
+
 def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
     """Solutions at fixed parameter on the far side of a corner ahead of the branch point a
     (z_a scaled, direction of travel t_in), each checked by ``check_crossing`` (strict): first

@@ -11,7 +11,8 @@ from typing import Protocol
 import numpy as np
 
 from ._newton import ContinuationWarning, ConvergenceError
-from .corners import JUMP_HS, Retrace, check_crossing, far_side, map_jump, tangent
+from .corners import (JUMP_HS, Retrace, check_crossing, far_side, map_jump,
+                      smooth_fold_beside, tangent)
 
 KINDS = ("fold", "period-doubling", "neimark-sacker")  # from the test functions
 
@@ -573,6 +574,14 @@ class Tracer:
                         else:
                             crossing = check_crossing(self, prob, pts[-1], z, t_in, ptn, zn,
                                                       strict=strict or not ok)
+                            if (crossing is not None and crossing.turn
+                                    and ds > 4 * self.ds_min
+                                    and smooth_fold_beside(self, pts[-1], crossing, ptn)):
+                                crossing = None  # the turn may be a smooth fold's on the
+                                # step: a shorter step separates the two (which one turns the
+                                # branch and where the grazing point lies is not up to
+                                # round-off)
+                                angle = np.nan
                             ok = crossing is not None
                             if ok:
                                 ptn.tangent = crossing.t_far

@@ -281,3 +281,35 @@ def test_branch_that_runs_onto_a_jump_of_the_map_says_so():
     # the smooth side is traced to the end of the range
     pts, loc, reason = tr.trace(prob, np.array([0.0, 0.0]), 0.0, direction=-1)
     assert reason == "left the parameter range"
+
+
+def test_a_corner_step_that_also_passes_a_smooth_fold_is_told_apart():
+    """corners.smooth_fold_beside: the step a -> b crosses a corner (bracket lo, hi); a real
+    multiplier through +1 between a and lo (near side) or between hi and b (far side) is a
+    smooth fold on the step as well (the tracer then shortens the step); a change of the
+    sign of prod(mu - 1) between lo and hi is the corner's own (a non-smooth fold); a
+    multiplier within fold_margin of +1 tells nothing. The multipliers are the paper model's
+    at 9.3342 Hz (the step 9.33459 -> 9.33552 Hz that passed the grazing point and the fold
+    9.333877 behind it)."""
+    from continuation.corners import smooth_fold_beside
+    from continuation.pathfollow import Point
+
+    def pt(p, mu):
+        return Point(u=np.zeros(2), p=p, xmax=1.0, multipliers=np.asarray(mu, dtype=complex),
+                     problem=None, n_impacts=0)
+
+    def crossing(lo, hi):
+        return Crossing(lo, hi, None, None, abs(hi.p - lo.p), 0.0, None, True, True)
+
+    tr = Tracer()
+    a, lo = pt(9.33459, [-1.296, -0.0066]), pt(9.334219, [-1.296, -0.0066])
+    hi, b = pt(9.334208, [-1.266, -0.0067]), pt(9.33552, [4.54, 0.0017])
+    assert smooth_fold_beside(tr, a, crossing(lo, hi), b)  # far side: + then -
+    assert smooth_fold_beside(tr, b, crossing(hi, lo), a)  # the same step the other way
+    hi_turn = pt(9.334208, [4.60, 0.0017])  # the sign changes across the corner itself
+    assert not smooth_fold_beside(tr, a, crossing(lo, hi_turn), b)
+    near_one = pt(9.33552, [1.02, 0.0017])  # within fold_margin 0.05 of +1: no verdict
+    assert not smooth_fold_beside(tr, a, crossing(lo, hi), near_one)
+    assert not smooth_fold_beside(tr, a, crossing(a, b), b)  # no bisection point: no verdict
+    tr.fold_margin = 0.01
+    assert smooth_fold_beside(tr, a, crossing(lo, hi), near_one)

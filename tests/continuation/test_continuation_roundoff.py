@@ -242,16 +242,15 @@ def test_grazing_points_within_each_others_bracket_are_merged():
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="the tracer's path still depends on round-off (issue 13 "
-                   "item 4; measured on s7-roundoff against x (1 + 1e-13) and x (1 - 1e-13)): "
-                   "9.15-9.34 Hz (the chattering stretch: at the grazing point 9.16773 the "
-                   "order-1 branch takes one of two far sides, then ends 'no progress' at "
-                   "9.17389 or 'step underflow' at 9.15538; folds/PDs of orders 1-2 there, one "
-                   "order-2 branch more; the grazing point 9.33376 or 9.33424), 66.55 Hz (an "
-                   "order-2 pair of grazing points 66.5529/66.5537, 8e-4 Hz apart and each "
-                   "within 3e-5 Hz, seen only where a tracer step lands between them), "
-                   "x (1 - 1e-13) only: 110.78-110.90 Hz (the second order-3 branch ends "
-                   "'stuck at a corner' at 110.896 or 'stop' at 110.785 Hz, one fold and one "
-                   "period doubling more): remove when it passes")
+                   "item 4; measured on s8-roundoff, docs/continuation_report.md: x (1 + "
+                   "1e-13) 8, x (1 - 1e-13) 6, A x (1 + 1e-13) 6 differences): 9.15-9.70 Hz "
+                   "(the chattering stretch: which far side the order-1 branch takes at the "
+                   "grazing point 9.16773, its folds / PDs and switched order-2 branches; the "
+                   "grazing point 9.33424 Hz, which the error estimate's widened bracket "
+                   "search moves to 9.33376 in some runs), 66.54-66.56 Hz (an order-2 pair of "
+                   "grazing points a few 1e-4 Hz apart, seen only where a tracer step lands "
+                   "between them) and 67.50-67.65 Hz (an order-2 half-branch stuck at a corner "
+                   "at 67.6397 or run on to 67.5002 Hz): remove when it passes")
 def test_paper_diagram_keeps_its_structure_under_round_off():
     """The whole paper diagram (A = 0.1 mm, 5-150 Hz, orders 1-3) with m, k, b, K_hertz x
     (1 + 1e-13): the same structure. (On 0312b23, outside those intervals the bifurcation
