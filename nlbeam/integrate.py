@@ -251,13 +251,16 @@ def integrate(model, excitation, t_end, method="rk4", dt=None, x0=None, *, t0=0.
     """Integrate ``model`` driven by ``excitation`` from t0 to t_end (s).
 
     method: 'rk2' (the paper's constant-step scheme, Heun), 'rk4', both with step ``dt`` (s)
-    outside contact and (estimated contact duration)/steps_per_contact inside, or 'adaptive'
-    (Dormand-Prince 5(4) with tolerances rtol, atol and quintic Hermite dense output; ``dt`` is
-    then the output spacing). Every contact onset and end is located to a few ulps of t and
-    stepped onto; no step crosses a contact boundary (``events=False`` switches this off, for
-    comparison only). With ``graded`` (default) the fixed-step methods step the start of each
-    contact uniformly in sqrt(t - t_onset) and its end uniformly in sqrt(delta), which keeps
-    their order across the delta^1.5 singularity of Hertz-type contact forces.
+    outside contact and min(dt, (estimated contact duration)/steps_per_contact) inside, or
+    'adaptive' (Dormand-Prince 5(4) with tolerances rtol, atol and quintic Hermite dense output;
+    ``dt`` is then the output spacing). Every contact onset and end is located to a few ulps
+    of t and stepped onto; no step crosses a contact boundary (``events=False`` switches this
+    off, for comparison only). With ``graded`` (default) the fixed-step methods step the start
+    of each contact uniformly in sqrt(t - t_onset) and its end uniformly in sqrt(delta), which
+    keeps their order across the delta^1.5 singularity of Hertz-type contact forces; these
+    graded steps double in number each time dt halves below twice the contact step, so
+    halving dt alone converges at the method's order (steps_per_contact refines the contacts
+    also where dt is above their steps).
     x0: initial state [x_1..x_N, v_1..v_N] (default: at rest).
     store_every: keep every k-th grid sample (0: none, only the end state).
     event_log: how many contact events to record in ``Trajectory.events`` (memory bound).

@@ -87,11 +87,14 @@ class Solver:
     """How a flow is integrated (every step decision; module doc).
 
     method: 'rk2' (Heun), 'rk4' (fixed step ``dt`` in free flight, the estimated contact
-    duration / ``steps_per_contact`` inside a contact) or 'adaptive' (Dormand-Prince 5(4) with
-    rtol, atol; ``dt`` is then the output spacing). dt (s): None for the default
-    1 / (STEPS_PER_PERIOD[method] * f), f the highest of the excitation's and the structure's
-    frequencies. steps_per_contact: None for STEPS_PER_CONTACT[method]. events: locate contact
-    boundaries (False only for comparison); graded: graded steps at contact onsets and ends."""
+    duration / ``steps_per_contact`` inside a contact, never longer than ``dt``) or 'adaptive'
+    (Dormand-Prince 5(4) with rtol, atol; ``dt`` is then the output spacing). dt (s): None for
+    the default 1 / (STEPS_PER_PERIOD[method] * f), f the highest of the excitation's and the
+    structure's frequencies. steps_per_contact: None for STEPS_PER_CONTACT[method]. events:
+    locate contact boundaries (False only for comparison); graded: graded steps at contact
+    onsets and ends (steps_per_contact // 4 of them each, times the least power of 2 m with
+    2 contact steps <= m dt: halving dt alone refines them too, and the error falls at the
+    method's order; docs/INTERNALS.md)."""
 
     method: str = "rk4"
     dt: float | None = None

@@ -18,6 +18,19 @@ def contact_step(e, v0, a0, sysa, spc):
 
 
 @njit(cache=True)
+def grade_multiple(dtn, dt):
+    """The graded phases at a contact's ends take grade_multiple * n_grade steps (in sigma, in
+    u): the least power of 2, m, with 2 dtn <= m dt (dtn the contact step, dt the free-flight
+    step, s), so that no graded step lasts longer than dt. A power of 2 of the ratio: constant
+    while the contact step changes by less than a factor 2 (a Hertz contact's velocity by 32),
+    so the map stays smooth in the state; halving dt doubles it, every graded step halves."""
+    m = 1
+    while 2.0 * dtn > m * dt and m < 1 << 20:
+        m *= 2
+    return m
+
+
+@njit(cache=True)
 def contact_step_sens(e, v0, a0, sysa, spc):
     """``contact_step`` and its derivatives in v0 and a0: (step, d step/d v0, d step/d a0)."""
     etype = sysa.etype

@@ -6,7 +6,8 @@ import numpy as np
 
 from .bundles import Outputs, Settings, Start, SystemArrays, Work
 from .codes import DP5, ERR_MAX_STEPS, ERR_STEP_UNDERFLOW, PWL_STOP, RK2, RK4, VMINUS_FLOOR
-from .contact import contact_rate, contact_rate_sens, contact_step, contact_step_sens
+from .contact import (contact_rate, contact_rate_sens, contact_step, contact_step_sens,
+                      grade_multiple)
 from .events import _crossing, _may_cross, delta_extremum, locate
 from .events_sens import boundary_time_sens, dsw_sens, onset_sens
 from .excite import excite
@@ -15,8 +16,8 @@ from .graded import rk_step_graded
 from .hook import _HAS_USER, njit
 from .routine import routine_steps
 from .samples import _store, grid_samples, track_xmax_step
-from .sens_steps import (SE_DSW, SE_DTC, SE_ROWS, SR_DSC, SR_GEND, SR_GH, SR_H, SR_ROWS, SR_T,
-                         SR_TN, SR_TREF, SR_U0, rk_step_sens, step_length_derivative,
+from .sens_steps import (SE_DSW, SE_DTC, SE_DTN, SE_ROWS, SR_DSC, SR_GEND, SR_GH, SR_H, SR_ROWS,
+                         SR_T, SR_TN, SR_TREF, SR_U0, rk_step_sens, step_length_derivative,
                          var_time_step)
 from .steps import _rk_step_plain, _rk_step_var, rk_step_free, rk_step_with_var, tableau
 
@@ -107,15 +108,18 @@ def _loop_for(want_var):
     (with ``want_var`` an argument, even a literal one, numba typed both sides).
 
     Fixed-step methods (RK2, RK4) step on the grid t0 + k dt in free flight; inside a contact
-    they take steps of (estimated contact duration) / spc, starting from the onset and ignoring
-    the grid (grid samples inside a contact come from the quintic Hermite dense output), so that
-    the step sequence is a smooth function of the initial state. Every contact boundary is a
-    root of the step map, landed on to a few ulps of t. With ``graded`` (one element in contact)
-    the first quarter of a contact is stepped uniformly in sigma = sqrt(t - t_onset), and from
-    the point where delta has fallen back to KAPPA * (its maximum) uniformly in u = sqrt(delta)
-    down to delta = 0 (then polished to round-off): this removes the delta^1.5 singularity of
-    the contact force at both boundaries. DP5 controls its error with (rtol, atol); grid samples
-    come from dense output. Samples: every store_every-th grid point, t0 and t_end included.
+    they take steps of min(dt, (estimated contact duration) / spc), starting from the onset and
+    ignoring the grid (grid samples inside a contact come from the quintic Hermite dense
+    output), so that the step sequence is a smooth function of the initial state. Every
+    contact boundary is a root of the step map, landed on to a few ulps of t. With ``graded``
+    (one element in contact) the first quarter of a contact is stepped uniformly in sigma =
+    sqrt(t - t_onset), and from the point where delta has fallen back to KAPPA * (its maximum)
+    uniformly in u = sqrt(delta) down to delta = 0 (then polished to round-off): this removes
+    the delta^1.5 singularity of the contact force at both boundaries. No step of these phases
+    lasts longer than dt either: n_grade * grade_multiple(dtn, dt) steps each (a power of 2 of
+    dtn / dt, not a function of the state), over spans that do not depend on dt. DP5 controls
+    its error with (rtol, atol); grid samples come from dense output. Samples: every
+    store_every-th grid point, t0 and t_end included.
     With want_var, P, dvm and the rows of SR and SE carry the derivative of the map as
     computed: every step size and step time that depends on the state is differentiated too
     (sens_steps.py, events_sens.py)."""
@@ -639,11 +643,14 @@ def _loop_for(want_var):
             if enter_exit:
                 phase = 2
                 g_u = math.sqrt(d_sw[pe])
-                g_h = g_u / n_grade
+                # n_grade * grade_multiple steps in u (the first, the longest, about
+                # 2 dtn / (3 m) <= dt), their number a function of dt and the contact step only
+                g_n = n_grade * grade_multiple(dtn[pe], dt)
+                g_h = g_u / g_n
                 if want_var:
                     for c in range(m):
                         SR[SR_U0, c] = SE[SE_DSW, pe, c] / (2.0 * g_u)
-                        SR[SR_GH, c] = SR[SR_U0, c] / n_grade
+                        SR[SR_GH, c] = SR[SR_U0, c] / g_n
             # ---- switch the discrete state at an event
             if ev >= 0:
                 y, yd, ydd, st = excite(t, xc, xp, xtab)
@@ -681,14 +688,18 @@ def _loop_for(want_var):
                         pe = ev
                         g_t0 = t
                         g_u = 0.0
-                        g_end = math.sqrt(n_grade * dtc[ev])
-                        g_h = g_end / n_grade
+                        # the phase spans n_grade nominal contact steps (a quarter of the
+                        # contact, whatever dt is) in g_n uniform steps of sigma; the last
+                        # lasts g_end^2 (2 g_n - 1) / g_n^2 < 2 dtn / grade_multiple <= dt
+                        g_end = math.sqrt(n_grade * dtn[ev])
+                        g_n = n_grade * grade_multiple(dtn[ev], dt)
+                        g_h = g_end / g_n
                         if want_var:
                             for c in range(m):
                                 SR[SR_TREF, c] = SR[SR_T, c]
                                 SR[SR_U0, c] = 0.0
-                                SR[SR_GEND, c] = n_grade * SE[SE_DTC, ev, c] / (2.0 * g_end)
-                                SR[SR_GH, c] = SR[SR_GEND, c] / n_grade
+                                SR[SR_GEND, c] = n_grade * SE[SE_DTN, ev, c] / (2.0 * g_end)
+                                SR[SR_GH, c] = SR[SR_GEND, c] / g_n
                     else:
                         phase = 0
                 else:

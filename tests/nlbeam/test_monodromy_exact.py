@@ -240,3 +240,19 @@ def test_onset_velocity_sensitivities_against_differences():
                                    atol=TOL * np.max(np.abs(ds / sc)))
         dvv = (hi.disc[0, 1] - lo.disc[0, 1]) / (2 * h)
         assert abs(fl.dvminus_dvminus0[0, 0] - dvv) < TOL * abs(dvv) + 1e-12
+
+
+@pytest.mark.parametrize("method", ["rk4", "rk2"])
+@pytest.mark.parametrize("name", ["hertz", "lankarani-nikravesh", "pwl-gap-on-base"])
+def test_monodromy_where_dt_limits_the_contact_steps(name, method):
+    # dt well below the contact step: the graded onset's steps in sigma and the exit's steps
+    # in u are shortened so that none lasts longer than dt, with the onset's span and the
+    # exit's start still functions of the state
+    model, ex, t_start, s0, scales = _orbit_start(name)
+    T = 1.0 / ex.frequency
+    dt = T / (4000 if method == "rk4" else 8000)
+    for off in OFFSETS[:2]:
+        fl, err, _ = _check_flow(model, ex, t_start + off * dt, s0, scales, T, method=method,
+                                 dt=dt)
+        assert fl.n_impacts >= 1 and not np.any(fl.disc[:, 0])
+        assert err < TOL, (off, err)
