@@ -157,10 +157,15 @@ class Tracer:
     predictor is dR/du from the variational equations (or, for a problem without them, the
     previous point's Jacobian, or forward differences) with dR/dp carried from the previous
     point, and every iterate updates it by Broyden's rank-one secant formula. With lazy_var
-    (default) the iterates after the predictor are flows without the variational equations
-    (3-6 times cheaper at N = 4), except one whose residual, at the last ratio of residuals,
-    is expected below tol; an accepted iterate without them is evaluated again with them
-    (its monodromies: the multipliers are always those of the accepted point). The variational
+    the iterates after the predictor are flows without the variational equations (a flow
+    with them costs 3.2 times one without at N = 1, 5.8 at N = 4), except one whose residual,
+    at the last ratio of residuals, is expected below tol; an accepted iterate without them
+    is evaluated again with them (the multipliers are always those of the accepted point).
+    lazy_var None (default): for systems of more than one DOF (more than two states);
+    True / False: always / never. (On the 1-DOF paper diagram,
+    lazy_var=True took 25.5 against 33.3 s CPU but converged to other points within tol,
+    which changed the step sequence and the diagram: 1843 against 1743 points, 17 against 14
+    branches: three more period-doubling bubbles found, 38 against 42 folds.) The variational
     monodromy is the derivative of the exact flow, not of the fixed-step map whose fixed point
     is solved for (the contact steps depend on the state); where the two differ by more than a
     few per cent (soft, chattering contacts; orbits with multipliers >> 1) plain Newton only
@@ -173,7 +178,7 @@ class Tracer:
                  grazing_iter=8, grazing_ds=0.01, contraction=0.7, noise_tol=1e-7,
                  progress_points=40, progress_min=2e-3, label="branch", fold_margin=0.05,
                  turn_tol=1e-3, retrace_tol=0.1, corner_segments=(2, 4), probe_after=3,
-                 creep_mu_step=0.25, lazy_var=True):
+                 creep_mu_step=0.25, lazy_var=None):
         self.p_min, self.p_max = p_min, p_max
         self.creep_mu_step = creep_mu_step
         self.ds0, self.ds_min, self.ds_max = ds, ds_min, ds_max
@@ -198,7 +203,7 @@ class Tracer:
         self.retrace_tol = retrace_tol
         self.corner_segments = tuple(corner_segments)
         self.probe_after = int(probe_after)
-        self.lazy_var = bool(lazy_var)
+        self.lazy_var = lazy_var
         self.n_evaluations = 0  # flows asked for (with or without variational equations)
         self.n_variational = 0  # of those, the correctors' flows with them
         self.end_evaluations = 0  # of those, the ones the last trace spent after its last point
@@ -280,11 +285,13 @@ class Tracer:
         self.iterates = []  # (z, number of impacts) of every iterate evaluated
         base = None
         rate = None  # the last residual ratio (res / res_prev)
+        lazy = (self.lazy_var if self.lazy_var is not None
+                else getattr(prob, "N2", len(w)) > 2)  # (N2: states per shooting segment)
         for it in range(1, self.max_iter + 1):
             # the variational equations at the predictor, then only at an iterate expected to
             # be the last (its residual, at the last ratio, below tol): the others are
             # flows without them, the Jacobian carried by Broyden's updates
-            if not var or base is None or not self.lazy_var:
+            if not var or base is None or not lazy:
                 fresh = var
             else:
                 fresh = res_prev * min(0.1 if rate is None else rate, 0.5) < self.tol
@@ -306,13 +313,13 @@ class Tracer:
                 base = self._base(prob, ev)
             if C is None:
                 C = self._correction(prob, z, ev, C_prev, fixed_p)
-                lazy = (z.copy(), ev) if fixed_p else None
+                lazy_p = (z.copy(), ev) if fixed_p else None
             elif dz_norm > 1e-6:
                 # Broyden's update (not from steps so short that the map's noise, ~1e-8 where
                 # contacts nearly stick, would dominate the difference)
                 C = C + np.outer(r - r_prev - (base + C) @ dz, dz) / (dz @ dz)
             B = base + C
-            ev.B, ev.C, ev.lazy_p = B, C, lazy
+            ev.B, ev.C, ev.lazy_p = B, C, lazy_p
             if res < self.tol or (res < 100 * self.tol and dz_norm < 1e-9):
                 return z, self._with_monodromy(prob, z, ev), it
             if it >= 3 and res > self.contraction * res_prev:
