@@ -36,7 +36,9 @@ def test_modal_branch_ends_at_the_jump_of_its_map_without_giving_up():
     assert reason == "discontinuous map"
     assert any("discontinuous just beyond" in str(w.message) for w in caught)
     last = pts[-1]
-    assert 12.010 < last.p < 12.017  # past the fold at 12.0067 Hz, before the jump
+    # past the fold at 12.0067 Hz, before the jump (12.016 Hz before main a9db3e3's contact
+    # step caps; there both correctors end at 12.0177-12.0178 Hz)
+    assert 12.010 < last.p < 12.019
     assert min(q.p for q in pts) < 12.007
     # the map does jump ahead of the last point: from the secant into the jump, |R| rises
     # to ~1e-2 within 1e-3 (scaled) and stays there
@@ -64,7 +66,9 @@ def test_without_the_probe_the_same_end_costs_more_work():
     assert abs(pts0[-1].p - pts[-1].p) < 2e-3
     print(f"flows: {tr0.n_evaluations} without the probe, {tr.n_evaluations} with it; "
           f"points {len(pts0)}, {len(pts)}")
-    assert tr.n_evaluations < 0.75 * tr0.n_evaluations
+    # (measured on main a9db3e3, both eager: 923 flows with the probe, 1059 without; 487
+    # and 893 before its contact step caps)
+    assert tr.n_evaluations < 0.9 * tr0.n_evaluations
 
 
 def test_lazy_variational_equations_trace_the_same_branch_with_fewer_of_them():
