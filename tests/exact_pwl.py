@@ -390,3 +390,34 @@ def _locate(P, ua, ub, sign):
 
     s = scipy.optimize.brentq(det, 0.0, 1.0, xtol=1e-14)
     return float(point(s)[0][2] * P.S[2])
+
+
+def turning_points(osc, f, z0, maxima=True):
+    """x (m) at every maximum (``maxima``: v from + to -) or minimum (v from - to +) of the
+    exact orbit through z0 at t = 0 over one period: bracketed on 400 samples per segment,
+    then Brent on v."""
+    _, _, segs, fl = period_map(osc, f, z0)
+    out = []
+    for (r, ta, tb, za) in segs:
+        ts = np.linspace(ta, tb, 401)
+        v = fl.states(r, ta, za, ts)[1]
+        turn = (v[:-1] > 0) & (v[1:] <= 0) if maxima else (v[:-1] < 0) & (v[1:] >= 0)
+        for i in np.flatnonzero(turn):
+            t = scipy.optimize.brentq(lambda t: fl.states(r, ta, za, t)[1, 0], ts[i],
+                                      ts[i + 1], xtol=1e-15, rtol=1e-15)
+            out.append(float(fl.states(r, ta, za, t)[0, 0]))
+    return out
+
+
+def damped_newton(eqs, u, max_iter=20, tol=1e-11):
+    """Solve eqs(u) = 0 (scaled unknowns) by Newton with a forward-difference Jacobian (1e-7)
+    and steps capped at 0.01; asserts that the residual ends below tol. Returns u."""
+    for _ in range(max_iter):
+        r = eqs(u)
+        J = np.array([(eqs(u + 1e-7 * e) - r) / 1e-7 for e in np.eye(len(u))]).T
+        du = np.linalg.solve(J, -r)
+        u = u + du * min(1.0, 0.01 / np.max(np.abs(du)))
+        if np.max(np.abs(du)) < 1e-12:
+            break
+    assert np.max(np.abs(eqs(u))) < tol, eqs(u)
+    return u

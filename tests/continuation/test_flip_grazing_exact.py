@@ -13,11 +13,10 @@ period map."""
 import warnings
 
 import numpy as np
-import scipy.optimize
 
 import continuation
 import nlbeam
-from exact_pwl import StopOscillator, period_map
+from exact_pwl import StopOscillator, damped_newton, period_map, turning_points
 
 GAP2 = 0.2062  # m, the lower stop
 
@@ -36,18 +35,8 @@ def _two_stops(amplitude):
 
 
 def _lowest(o, f, z0):
-    """The minimum of x (m) over the exact one-stop orbit through z0 at t = 0 (minima where v
-    goes from - to +: bracketed on 400 samples per segment, then Brent)."""
-    _, _, segs, fl = period_map(o, f, z0)
-    out = []
-    for (r, ta, tb, za) in segs:
-        ts = np.linspace(ta, tb, 401)
-        v = fl.states(r, ta, za, ts)[1]
-        for i in np.flatnonzero((v[:-1] < 0) & (v[1:] >= 0)):
-            t = scipy.optimize.brentq(lambda t: fl.states(r, ta, za, t)[1, 0], ts[i],
-                                      ts[i + 1], xtol=1e-15, rtol=1e-15)
-            out.append(float(fl.states(r, ta, za, t)[0, 0]))
-    return min(out)
+    """The minimum of x (m) over the exact one-stop orbit through z0 at t = 0."""
+    return min(turning_points(o, f, z0, maxima=False))
 
 
 def _exact_flip_grazing(f, A, z0):
@@ -63,15 +52,7 @@ def _exact_flip_grazing(f, A, z0):
         return np.r_[(zT - z) / S[:2], np.linalg.det(M + np.eye(2)),
                      (_lowest(o, ff, z) + GAP2) / 0.1]
 
-    u = np.r_[z0, f, A] / S
-    for _ in range(20):
-        r = eqs(u)
-        J = np.array([(eqs(u + 1e-7 * e) - r) / 1e-7 for e in np.eye(4)]).T
-        du = np.linalg.solve(J, -r)
-        u = u + du * min(1.0, 0.01 / np.max(np.abs(du)))  # damped
-        if np.max(np.abs(du)) < 1e-12:
-            break
-    assert np.max(np.abs(eqs(u))) < 1e-11, eqs(u)
+    u = damped_newton(eqs, np.r_[z0, f, A] / S)
     return u[2] * S[2], u[3] * S[3]
 
 

@@ -10,10 +10,9 @@ Newton on the exact period map."""
 import warnings
 
 import numpy as np
-import scipy.optimize
 
 import continuation
-from exact_pwl import StopOscillator, period_map
+from exact_pwl import StopOscillator, damped_newton, period_map, turning_points
 
 A0 = 4.0
 
@@ -24,18 +23,8 @@ def _osc(amplitude, gap=0.1):
 
 def _peak(o, f, z0):
     """The maximum of x (m) of the exact orbit through z0 at t = 0 closest to 0.1 m, the
-    grazing peak (maxima where v goes from + to -: bracketed on 400 samples per segment,
-    then Brent; the deep contact's maximum lies far above 0.1 m)."""
-    _, _, segs, fl = period_map(o, f, z0)
-    peaks = []
-    for (r, ta, tb, za) in segs:
-        ts = np.linspace(ta, tb, 401)
-        v = fl.states(r, ta, za, ts)[1]
-        for i in np.flatnonzero((v[:-1] > 0) & (v[1:] <= 0)):
-            t = scipy.optimize.brentq(lambda t: fl.states(r, ta, za, t)[1, 0], ts[i],
-                                      ts[i + 1], xtol=1e-15, rtol=1e-15)
-            peaks.append(float(fl.states(r, ta, za, t)[0, 0]))
-    return min(peaks, key=lambda x: abs(x - 0.1))
+    grazing peak (the deep contact's maximum lies far above 0.1 m)."""
+    return min(turning_points(o, f, z0), key=lambda x: abs(x - 0.1))
 
 
 def _exact_fold_grazing(f, A, z0, lift):
@@ -54,15 +43,7 @@ def _exact_fold_grazing(f, A, z0, lift):
         return np.r_[(zT - z) / S[:2], np.linalg.det(M - np.eye(2)),
                      (_peak(o, ff, z) - 0.1) / 0.1]
 
-    u = np.r_[z0, f, A] / S
-    for _ in range(20):  # Newton, Jacobian by forward differences (1e-7 of the scaled u)
-        r = eqs(u)
-        J = np.array([(eqs(u + 1e-7 * e) - r) / 1e-7 for e in np.eye(4)]).T
-        du = np.linalg.solve(J, -r)
-        u = u + du * min(1.0, 0.01 / np.max(np.abs(du)))  # damped
-        if np.max(np.abs(du)) < 1e-12:
-            break
-    assert np.max(np.abs(eqs(u))) < 1e-11, eqs(u)
+    u = damped_newton(eqs, np.r_[z0, f, A] / S)
     return np.array([u[2] * S[2], u[3] * S[3]])
 
 

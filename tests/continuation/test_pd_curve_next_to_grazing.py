@@ -16,7 +16,7 @@ import pytest
 import scipy.optimize
 
 import continuation
-from exact_pwl import StopOscillator, orbit, period_map
+from exact_pwl import StopOscillator, orbit, turning_points
 
 # f_n = 1 Hz, damping ratio 0.02, stop 100 k after 0.1 m, 1 N: the period doubling of the
 # harmonic branch at 0.8655634 Hz lies next to its lower grazing point (test_exact_pwl.py)
@@ -61,18 +61,8 @@ def test_period_doubling_curve_along_the_grazing_curve_against_the_closed_form()
 
 
 def _free_peak(o, f, z0, gap=0.1):
-    """The maximum of x (m) of the exact orbit through z0 at t = 0 closest to the gap (maxima
-    where v goes from + to -: bracketed on 400 samples per segment, then Brent)."""
-    _, _, segs, fl = period_map(o, f, z0)
-    peaks = []
-    for (r, ta, tb, za) in segs:
-        ts = np.linspace(ta, tb, 401)
-        v = fl.states(r, ta, za, ts)[1]
-        for i in np.flatnonzero((v[:-1] > 0) & (v[1:] <= 0)):
-            t = scipy.optimize.brentq(lambda t: fl.states(r, ta, za, t)[1, 0], ts[i],
-                                      ts[i + 1], xtol=1e-15, rtol=1e-15)
-            peaks.append(float(fl.states(r, ta, za, t)[0, 0]))
-    return min(peaks, key=lambda x: abs(x - gap))
+    """The maximum of x (m) of the exact orbit through z0 at t = 0 closest to the gap."""
+    return min(turning_points(o, f, z0), key=lambda x: abs(x - gap))
 
 
 def test_period_doubling_at_a_grazing_point_is_refused_with_the_way_out():

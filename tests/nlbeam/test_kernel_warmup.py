@@ -11,6 +11,8 @@ import textwrap
 import nlbeam
 from nlbeam.integrate import compile_kernels
 
+from helpers import TINY_STOCHASTIC
+
 _REPORT = """
 import json
 import numba
@@ -105,20 +107,13 @@ def test_a_scene_leaves_one_signature_per_kernel(tmp_path):
         f_range = [42.0, 45.0]
         orders = [1]
         n_grid = 3
-        [stochastic]
-        band = [0.0, 100.0]
-        rms = 1e-4
-        seed = 1
-        duration = 1.5
-        transient = 0.1
-        psd_resolution = 2.0
         [[figure]]
         kind = "frc"
         file = "frc.png"
         [[figure]]
         kind = "psd"
         file = "psd.png"
-    """))
+    """) + TINY_STOCHASTIC)
     got = _run(f"""
         from nlbeam.scenes import run_scene
         run_scene({str(scene)!r}, {str(tmp_path / "out")!r}, quiet=True, workers=1)
