@@ -1,0 +1,119 @@
+"""Flows of the shooting problems already computed, kept for when the same flow is asked for
+again (a diagram asks for about 7 % of its flows twice: accepted branch points evaluated
+again by the error estimates, states at phase zero, trial points re-solved from the same
+start, forward differences at a point already differenced).
+
+A flow is a deterministic function of its arguments, so a kept one is the same result bit for
+bit: the key holds everything the kernel reads (the model's kernel arrays, the excitation's,
+the method and its settings, the start state and contact state, start time, duration, step
+and step limit). A flow with the variational equations also answers a request without them
+(the trajectory is the same: the variational equations do not steer the steps). A flow is
+kept as a copy and a hit returns a copy (arrays included): what a caller does with its flow
+never changes what a later caller gets.
+
+Memory is bounded (``MAX_BYTES``, least recently used flows dropped first); ``clear()``
+empties it, ``enabled = False`` turns it off (every flow computed).
+"""
+from __future__ import annotations
+
+import copy
+import itertools
+from collections import OrderedDict
+
+import numpy as np
+
+#: the most bytes of arrays kept (least recently used flows are dropped first)
+MAX_BYTES = 32 * 2 ** 20
+#: per kept flow, for the key and the objects around the arrays
+OVERHEAD = 1000
+
+enabled = True
+_flows = OrderedDict()  # key -> (model, Flow, bytes)
+_bytes = 0
+hits = {"plain": 0, "var": 0}
+
+
+_systems = {}  # the kernel arrays of each model seen -> a number (the keys' first part)
+_numbers = itertools.count()  # (never reused: a FlowMap keeps its number across clear())
+
+
+def _bytes_of(*arrays):
+    """The contents of the arrays (numbers too), shapes and types included."""
+    out = []
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        out.append((a.dtype.str, a.shape, a.tobytes()))
+    return tuple(out)
+
+
+def key(fm, state, t0, duration, disc0, dt, max_steps):
+    """The key of the flow of FlowMap ``fm`` from ``state`` at t0 (s) over duration (s) with
+    contact state disc0 (None: the start-in-contact rule), step dt (s) and step limit."""
+    sys_key = getattr(fm, "_cache_sys", None)
+    if sys_key is None or sys_key[0] is not fm.sysa:
+        contents = _bytes_of(*fm.sysa)
+        if contents not in _systems:
+            if len(_systems) >= 256:
+                clear()
+            _systems[contents] = next(_numbers)
+        sys_key = (fm.sysa, _systems[contents])
+        fm._cache_sys = sys_key
+    return (sys_key[1], _bytes_of(fm.xc, fm.xp, fm.xtab), fm.meth, fm.spc, fm.rtol, fm.atol,
+            fm.events, fm.graded, np.asarray(state, dtype=float).tobytes(), float(t0),
+            float(duration), None if disc0 is None else _bytes_of(disc0), float(dt),
+            int(max_steps))
+
+
+def get(k, model, monodromy):
+    """A kept flow for key k of model (with the variational equations if ``monodromy``), or
+    None."""
+    if not enabled:
+        return None
+    for mono in ((True,) if monodromy else (False, True)):
+        hit = _flows.get((k, mono))
+        if hit is not None and hit[0] is model:
+            _flows.move_to_end((k, mono))
+            hits["var" if monodromy else "plain"] += 1
+            return _copy(hit[1])
+    return None
+
+
+_ARRAYS = ("state", "disc", "xmax", "monodromy", "dstate_dvminus0", "dvminus_dstate0",
+           "dvminus_dvminus0")
+
+
+def _copy(flow):
+    """A copy of an nlbeam.Flow with copies of its arrays."""
+    out = copy.copy(flow)
+    for name in _ARRAYS:
+        a = getattr(out, name)
+        if isinstance(a, np.ndarray):
+            setattr(out, name, a.copy())
+    return out
+
+
+def put(k, model, monodromy, flow):
+    """Keep a copy of ``flow`` (of model, with the variational equations if ``monodromy``)
+    under key k."""
+    global _bytes
+    if not enabled:
+        return
+    flow = _copy(flow)
+    size = OVERHEAD + len(k[8]) + (0 if k[11] is None else len(k[11][0][2]))
+    size += sum(getattr(flow, name).nbytes for name in _ARRAYS
+                if isinstance(getattr(flow, name), np.ndarray))
+    old = _flows.pop((k, bool(monodromy)), None)
+    if old is not None:
+        _bytes -= old[2]
+    _flows[(k, bool(monodromy))] = (model, flow, size)
+    _bytes += size
+    while _bytes > MAX_BYTES and _flows:
+        _bytes -= _flows.popitem(last=False)[1][2]
+
+
+def clear():
+    """Drop every kept flow."""
+    global _bytes
+    _flows.clear()
+    _systems.clear()
+    _bytes = 0
