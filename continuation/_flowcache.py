@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import copy
 import itertools
+import threading
 from collections import OrderedDict
 
 import numpy as np
@@ -33,6 +34,7 @@ enabled = True
 _flows = OrderedDict()  # key -> (model, Flow, bytes)
 _bytes = 0
 hits = {"plain": 0, "var": 0}
+_lock = threading.Lock()  # (a Dask worker may run tasks in threads)
 
 
 _systems = {}  # the kernel arrays of each model seen -> a number (the keys' first part)
@@ -54,11 +56,12 @@ def key(fm, state, t0, duration, disc0, dt, max_steps):
     sys_key = getattr(fm, "_cache_sys", None)
     if sys_key is None or sys_key[0] is not fm.sysa:
         contents = _bytes_of(*fm.sysa)
-        if contents not in _systems:
+        number = _systems.get(contents)
+        if number is None:
             if len(_systems) >= 256:
                 clear()
-            _systems[contents] = next(_numbers)
-        sys_key = (fm.sysa, _systems[contents])
+            number = _systems[contents] = next(_numbers)
+        sys_key = (fm.sysa, number)
         fm._cache_sys = sys_key
     return (sys_key[1], _bytes_of(fm.xc, fm.xp, fm.xtab), fm.meth, fm.spc, fm.rtol, fm.atol,
             fm.events, fm.graded, np.asarray(state, dtype=float).tobytes(), float(t0),
@@ -71,12 +74,13 @@ def get(k, model, monodromy):
     None."""
     if not enabled:
         return None
-    for mono in ((True,) if monodromy else (False, True)):
-        hit = _flows.get((k, mono))
-        if hit is not None and hit[0] is model:
-            _flows.move_to_end((k, mono))
-            hits["var" if monodromy else "plain"] += 1
-            return _copy(hit[1])
+    with _lock:
+        for mono in ((True,) if monodromy else (False, True)):
+            hit = _flows.get((k, mono))
+            if hit is not None and hit[0] is model:
+                _flows.move_to_end((k, mono))
+                hits["var" if monodromy else "plain"] += 1
+                return _copy(hit[1])
     return None
 
 
@@ -104,18 +108,20 @@ def put(k, model, monodromy, flow):
     size = OVERHEAD + len(k[8]) + (0 if k[11] is None else len(k[11][0][2]))
     size += sum(getattr(flow, name).nbytes for name in _ARRAYS
                 if isinstance(getattr(flow, name), np.ndarray))
-    old = _flows.pop((k, bool(monodromy)), None)
-    if old is not None:
-        _bytes -= old[2]
-    _flows[(k, bool(monodromy))] = (model, flow, size)
-    _bytes += size
-    while _bytes > MAX_BYTES and _flows:
-        _bytes -= _flows.popitem(last=False)[1][2]
+    with _lock:
+        old = _flows.pop((k, bool(monodromy)), None)
+        if old is not None:
+            _bytes -= old[2]
+        _flows[(k, bool(monodromy))] = (model, flow, size)
+        _bytes += size
+        while _bytes > MAX_BYTES and _flows:
+            _bytes -= _flows.popitem(last=False)[1][2]
 
 
 def clear():
     """Drop every kept flow."""
     global _bytes
-    _flows.clear()
-    _systems.clear()
-    _bytes = 0
+    with _lock:
+        _flows.clear()
+        _systems.clear()
+        _bytes = 0
