@@ -76,6 +76,21 @@ def test_hits_equal_fresh_flows_bit_for_bit(f):
     assert _flowcache.hits["var"] >= len(_starts(model, f))
 
 
+@pytest.mark.parametrize("method", ["rk4", "adaptive"])
+def test_plain_from_variational_on_a_modal_beam(method):
+    """A plain request answered by a kept variational flow equals a fresh plain flow also for
+    several modes and the adaptive method (whose steps must not depend on the variational
+    equations)."""
+    model = nlbeam.ModalBeam.paper(n_modes=2)
+    f = 44.0
+    prob, ex = _problem(model, f, method=method), forcing(A, f)
+    for s in _starts(model, f, n=4, seed=11):
+        prob.flow_phases(model, ex, s, 0.1, 1.0, monodromy=True)
+        plain = prob.flow_phases(model, ex, s, 0.1, 1.0)
+        _equal(plain, _fresh(prob, model, ex, s, 0.1, 1.0), FIELDS[:3])
+    assert _flowcache.hits["plain"] == 4
+
+
 def test_no_answer_for_another_flow():
     """Requests that differ in any input get their own flow (compared with fresh ones)."""
     model = nlbeam.BeamImpact.paper()
