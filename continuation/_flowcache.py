@@ -17,7 +17,6 @@ empties it, ``enabled = False`` turns it off (every flow computed).
 from __future__ import annotations
 
 import copy
-import itertools
 import threading
 from collections import OrderedDict
 
@@ -37,8 +36,7 @@ hits = {"plain": 0, "var": 0}
 _lock = threading.Lock()  # (a Dask worker may run tasks in threads)
 
 
-_systems = {}  # the kernel arrays of each model seen -> a number (the keys' first part)
-_numbers = itertools.count()  # (never reused: a FlowMap keeps its number across clear())
+_interned = {}  # kernel arrays' contents -> one object of them, shared by every key
 
 
 def _bytes_of(*arrays):
@@ -55,13 +53,12 @@ def key(fm, state, t0, duration, disc0, dt, max_steps):
     contact state disc0 (None: the start-in-contact rule), step dt (s) and step limit."""
     sys_key = getattr(fm, "_cache_sys", None)
     if sys_key is None or sys_key[0] is not fm.sysa:
+        # the contents themselves (one object shared by the keys of this map, which a pickled
+        # map carries to another process with the same meaning)
         contents = _bytes_of(*fm.sysa)
-        number = _systems.get(contents)
-        if number is None:
-            if len(_systems) >= 256:
-                clear()
-            number = _systems[contents] = next(_numbers)
-        sys_key = (fm.sysa, number)
+        if len(_interned) >= 256:
+            _interned.clear()  # (only the sharing is lost)
+        sys_key = (fm.sysa, _interned.setdefault(contents, contents))
         fm._cache_sys = sys_key
     return (sys_key[1], _bytes_of(fm.xc, fm.xp, fm.xtab), fm.meth, fm.spc, fm.rtol, fm.atol,
             fm.events, fm.graded, np.asarray(state, dtype=float).tobytes(), float(t0),
@@ -123,5 +120,4 @@ def clear():
     global _bytes
     with _lock:
         _flows.clear()
-        _systems.clear()
         _bytes = 0

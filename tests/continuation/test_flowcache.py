@@ -115,6 +115,27 @@ def test_no_answer_for_another_flow():
     assert _flowcache.hits["plain"] == 0 and _flowcache.hits["var"] == 0
 
 
+def test_pickled_problems_keep_their_meaning():
+    """A problem sent to another process (pickled with its FlowMap) asks for its own model's
+    flows: the same flow is a hit, another model's problem at the same inputs is not."""
+    import pickle
+
+    model = nlbeam.BeamImpact.paper()
+    other = with_parameter(model, "K_hertz", 2.0 * model.parameters()["K_hertz"])
+    f = 9.3
+    ex = forcing(A, f)
+    s = _starts(model, f, n=1)[0]
+    p_m, p_o = _problem(model, f), _problem(other, f)
+    p_m.flow_phases(model, ex, s, 0.0, 1.0)
+    p_o.flow_phases(other, ex, s, 0.0, 1.0)
+    q_m, q_o = pickle.loads(pickle.dumps(p_m)), pickle.loads(pickle.dumps(p_o))
+    m2, o2 = q_m.base_model, q_o.base_model  # (unpickled models: other objects)
+    _equal(q_o.flow_phases(o2, ex, s, 0.0, 1.0), _fresh(p_o, other, ex, s, 0.0, 1.0),
+           FIELDS[:3])
+    _equal(q_m.flow_phases(m2, ex, s, 0.0, 1.0), _fresh(p_m, model, ex, s, 0.0, 1.0),
+           FIELDS[:3])
+
+
 def test_a_caller_cannot_change_a_kept_flow():
     model = nlbeam.BeamImpact.paper()
     f = 44.0
