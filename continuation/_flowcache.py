@@ -60,7 +60,12 @@ def key(fm, state, t0, duration, disc0, dt, max_steps):
             _interned.clear()  # (only the sharing is lost)
         sys_key = (fm.sysa, _interned.setdefault(contents, contents))
         fm._cache_sys = sys_key
-    return (sys_key[1], _bytes_of(fm.xc, fm.xp, fm.xtab), fm.meth, fm.spc, fm.rtol, fm.atol,
+    ex_key = getattr(fm, "_cache_ex", None)
+    if ex_key is None or not (ex_key[0] is fm.xc and ex_key[1] is fm.xp
+                              and ex_key[2] is fm.xtab):
+        ex_key = (fm.xc, fm.xp, fm.xtab, _bytes_of(fm.xc, fm.xp, fm.xtab))
+        fm._cache_ex = ex_key  # (FlowMap.retarget gives new arrays: computed again)
+    return (sys_key[1], ex_key[3], fm.meth, fm.spc, fm.rtol, fm.atol,
             fm.events, fm.graded, np.asarray(state, dtype=float).tobytes(), float(t0),
             float(duration), None if disc0 is None else _bytes_of(disc0), float(dt),
             int(max_steps))
