@@ -28,6 +28,7 @@ from nlbeam.summary import Summary, field_rows
 from nlbeam.solver import Solver, period_step, phase_step
 from nlbeam.vocabulary import METHODS as METHOD_NAMES
 
+from . import _flowcache
 from ._newton import ConvergenceError, ContinuationWarning, newton
 from .pathfollow import Problem
 
@@ -238,11 +239,20 @@ class ShootingProblem(Problem):
         else:
             dt = self.integrator.solver.default_dt(model, ex)
         fm = self._flowmap(model, ex)
+        max_steps = int(50 * dur / dt) + 20000 if newton else 100_000_000
+        key = _flowcache.key(fm, state, phase0 / f, dur, disc0, dt, max_steps)
+        fl = _flowcache.get(key, model, monodromy)
+        if fl is not None:  # computed before: the same flow bit for bit
+            return fl
         if not newton:
-            return fm(state, phase0 / f, dur, monodromy=monodromy, disc0=disc0, dt=dt)
+            fl = fm(state, phase0 / f, dur, monodromy=monodromy, disc0=disc0, dt=dt)
+            _flowcache.put(key, model, monodromy, fl)
+            return fl
         try:
-            return fm(state, phase0 / f, dur, monodromy=monodromy, disc0=disc0, dt=dt,
-                      max_steps=int(50 * dur / dt) + 20000)
+            fl = fm(state, phase0 / f, dur, monodromy=monodromy, disc0=disc0, dt=dt,
+                    max_steps=max_steps)
+            _flowcache.put(key, model, monodromy, fl)
+            return fl
         except (nlbeam.IntegrationError, ValueError) as exc:
             # an iterate far from any orbit (e.g. a huge penetration, or a parameter so far off
             # that the fixed step is beyond the method's stability limit): a failed Newton step
