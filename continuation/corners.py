@@ -80,6 +80,13 @@ def _oriented(pt, ref):
         return ref / np.linalg.norm(ref)
 
 
+def _behind(dz, t, cos_max=-0.5):
+    """Does the step dz (scaled) from a branch point run back against its direction of travel
+    t (unit), at an angle whose cosine is below cos_max?"""
+    n = float(np.linalg.norm(dz))
+    return n > 0.0 and float(dz @ t) < cos_max * n
+
+
 def check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict):
     """Is b (another number of impacts than a) the continuation of the branch through a (z_a,
     direction of travel t_a) across a grazing point? The chord from a to b is bisected (the
@@ -129,6 +136,9 @@ def check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict):
         if not stop:
             q = tr._point(prob, zs, evs)
             done += 1
+            if q.n_impacts == a.n_impacts and _behind(zs - z_a, t_near):
+                return None  # the mid-plane cut a's own stretch behind a: the chord brackets
+                # no corner ahead of a (b lies on another strand)
             if q.n_impacts == a.n_impacts:
                 lo, z_lo = q, zs
             else:
