@@ -201,6 +201,23 @@ def test_retrace_detector_on_a_polyline():
     (kind, i), k = run(Retrace(0.1, [1.0], 1.0), loop)
     assert kind == "same" and i == 0 and np.linspace(0, 2 * np.pi + 0.3, 30)[k] > 2 * np.pi
 
+    # segments long in the state, short in the parameter; a point back along them in the
+    # state but beyond their parameter range (the strand past a fold next to them, 2.7 of the
+    # last segment's parameter extent away): a retrace only where a fold may lie on the
+    # segment (the sign of prod(mu - 1) differs at its ends, or is unknown)
+    def flat(mus):
+        pts = [P(x, 0.01 * x) for x in (0.0, 1.0, 2.0, 3.0)] + [P(2.5, -0.002)]
+        for q, mu in zip(pts, mus):
+            q.multipliers = None if mu is None else np.array([mu])
+        return pts
+    assert run(Retrace(0.1, [1.0], 1.0), flat([0.5] * 5)) == (None, 4)
+    assert run(Retrace(0.1, [1.0], 1.0), flat([0.5, 0.5, 0.5, 1.5, 0.5])) == (("retrace", 2), 4)
+    assert run(Retrace(0.1, [1.0], 1.0), flat([None] * 5)) == (("retrace", 2), 4)
+    # within the parameter range widened by tol (here 0.1 of 0.01): a retrace
+    pts = flat([0.5] * 5)
+    pts[-1].p = 0.0195
+    assert run(Retrace(0.1, [1.0], 1.0), pts) == (("retrace", 2), 4)
+
 
 class Jump(Problem):
     """R(u, p) = (u1 - p - g(p), u2 - p^2 / 2) with g(p) = kink(p - p0): a jump of height
