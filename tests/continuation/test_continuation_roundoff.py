@@ -81,8 +81,11 @@ def structure_differences(a, b, f_rel=2e-3, rel=1e-7):
     """What differs between the structures of diagrams a and b: branches (count per order,
     covered ranges, their ends within f_rel relative: a switched branch starts at its period
     doubling's first point, one step away) and bifurcations (per kind and order the same count,
-    matched in order of frequency within the sum of their stated tolerances plus ``rel``
-    relative: the round-off of the located point)."""
+    matched in order of frequency within the sum of their stated errors, the errors the
+    bifurcation table prints them with (``numbers.bifurcation_error``: the bracket, the
+    estimated integration error, bif_tol, and 1e-5 of f at grazing points and at bifurcations
+    reported at one), plus ``rel`` relative: the round-off of the located point)."""
+    from nlbeam.app.scenes.numbers import bifurcation_error
     diff = []
     orders = sorted({br.order for br in a.branches} | {br.order for br in b.branches})
     for o in orders:
@@ -104,9 +107,10 @@ def structure_differences(a, b, f_rel=2e-3, rel=1e-7):
                         f"{[round(x.frequency, 6) for x in xb]}")
             continue
         for x, y in zip(xa, xb):
-            if abs(x.frequency - y.frequency) > x.tolerance + y.tolerance + rel * x.frequency:
-                diff.append(f"{key}: {x.frequency:.10g} (+- {x.tolerance:.1e}) against "
-                            f"{y.frequency:.10g} (+- {y.tolerance:.1e})")
+            ex, ey = bifurcation_error(x, a), bifurcation_error(y, b)
+            if abs(x.frequency - y.frequency) > ex + ey + rel * x.frequency:
+                diff.append(f"{key}: {x.frequency:.10g} (+- {ex:.1e}) against "
+                            f"{y.frequency:.10g} (+- {ey:.1e})")
     return diff
 
 
@@ -199,8 +203,12 @@ def test_structure_differences_sees_a_missing_bifurcation(reference_window):
     assert structure_differences(reference_window, frc)
     frc = copy.deepcopy(reference_window)
     b = [b for b in frc.bifurcations if b.kind == "period-doubling" and b.order == 1][0]
-    b.frequency += 10 * b.tolerance + 1e-6 * b.frequency
+    from nlbeam.app.scenes.numbers import bifurcation_error
+    e = bifurcation_error(b, frc)  # its stated error (the table's), shifted 3 times that
+    b.frequency += 3 * e + 1e-6 * b.frequency
     assert structure_differences(reference_window, frc)
+    b.frequency -= 2.6 * e + 1e-6 * b.frequency  # 0.4 of it: the same
+    assert structure_differences(reference_window, frc) == []
 
 
 def test_numbers_are_printed_to_the_decade_of_their_error():
@@ -238,6 +246,23 @@ def test_grazing_points_within_each_others_bracket_are_merged():
     assert not _merged_grazing(g(7.80, 1e-4), bifs)  # outside the brackets
     assert not _merged_grazing(g(7.7898, 1e-4, branch=1), bifs)  # another branch
     assert not _merged_grazing(g(7.7898, 1e-4, kind="fold"), bifs)
+    # brackets far below the grazing resolution (1e-5 of f): merged within it, not beyond
+    f0 = 67.5012
+    bifs = [g(f0, 2e-6)]
+    assert _merged_grazing(g(f0 + 0.9e-5 * f0, 3e-6), bifs)
+    assert bifs[0].tolerance == pytest.approx(0.9e-5 * f0 + 3e-6)
+    assert not _merged_grazing(g(f0 + 1.1e-5 * f0 + 2e-5 + bifs[0].tolerance, 1e-6), bifs)
+    # a bifurcation reported at a grazing point (a multiplier jumps across the unit circle)
+    # next to one of its kind: one event; a smooth one is never merged
+    jump = "at grazing: multiplier jumps from -2.554 to 4.003 (non-smooth)"
+    bifs = [g(f0, 5e-5, kind="period-doubling")]
+    bifs[0].note = jump
+    nxt = g(f0 + 4e-5, 9e-5, kind="period-doubling")
+    nxt.note = jump
+    assert _merged_grazing(nxt, bifs) and bifs[0].tolerance == pytest.approx(1.3e-4)
+    assert bifs[0].note == jump + " (2 such jumps within the bracket)" and not bifs[0].smooth
+    assert _merged_grazing(nxt, bifs) and bifs[0].note.endswith("(3 such jumps within the bracket)")
+    assert not _merged_grazing(g(f0 + 1e-5, 1e-6, kind="period-doubling"), bifs)  # smooth
 
 
 @pytest.mark.slow
