@@ -99,10 +99,10 @@ def check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict):
     Then the travel direction on the far side (away from the grazing point) and the fold
     signs at a and b must agree (``fold_sign``): the parameter turns back if and only if the
     sign of prod(mu - 1) changes, unless that sign or the direction is too uncertain to tell;
-    and where it does not turn back, b must not lie behind a in the parameter. strict: the bisection must have joined the sides
-    (else an unfinished bisection is accepted). b is judged after three bisections; only an
-    accepted b is bracketed on (``tr.grazing_iter`` bisections in all). Returns a Crossing,
-    or None."""
+    and where it does not turn back, b must not lie behind a in the parameter. strict: the
+    bisection must have joined the sides (else an unfinished bisection is accepted). b is
+    judged after three bisections; only an accepted b is bracketed on (``tr.grazing_iter``
+    bisections in all). Returns a Crossing, or None."""
     lo, z_lo, hi, z_hi = a, z_a, b, z_b
     L0 = float(np.linalg.norm(z_b - z_a))
     e_p = np.zeros(len(z_a))
