@@ -201,6 +201,23 @@ def test_retrace_detector_on_a_polyline():
     (kind, i), k = run(Retrace(0.1, [1.0], 1.0), loop)
     assert kind == "same" and i == 0 and np.linspace(0, 2 * np.pi + 0.3, 30)[k] > 2 * np.pi
 
+    # segments long in the state, short in the parameter; a point back along them in the
+    # state but beyond their parameter range (the strand past a fold next to them, 2.7 of the
+    # last segment's parameter extent away): a retrace only where a fold may lie on the
+    # segment (the sign of prod(mu - 1) differs at its ends, or is unknown)
+    def flat(mus):
+        pts = [P(x, 0.01 * x) for x in (0.0, 1.0, 2.0, 3.0)] + [P(2.5, -0.002)]
+        for q, mu in zip(pts, mus):
+            q.multipliers = None if mu is None else np.array([mu])
+        return pts
+    assert run(Retrace(0.1, [1.0], 1.0), flat([0.5] * 5)) == (None, 4)
+    assert run(Retrace(0.1, [1.0], 1.0), flat([0.5, 0.5, 0.5, 1.5, 0.5])) == (("retrace", 2), 4)
+    assert run(Retrace(0.1, [1.0], 1.0), flat([None] * 5)) == (("retrace", 2), 4)
+    # within the parameter range widened by tol (here 0.1 of 0.01): a retrace
+    pts = flat([0.5] * 5)
+    pts[-1].p = 0.0195
+    assert run(Retrace(0.1, [1.0], 1.0), pts) == (("retrace", 2), 4)
+
 
 class Jump(Problem):
     """R(u, p) = (u1 - p - g(p), u2 - p^2 / 2) with g(p) = kink(p - p0): a jump of height
@@ -313,3 +330,44 @@ def test_a_corner_step_that_also_passes_a_smooth_fold_is_told_apart():
     assert not smooth_fold_beside(tr, a, crossing(a, b), b)  # no bisection point: no verdict
     tr.fold_margin = 0.01
     assert smooth_fold_beside(tr, a, crossing(lo, hi), near_one)
+
+
+def _scripted_crossing(offset):
+    """check_crossing from a (0, 0; p = 0, 3 impacts, travelling along u1) to b (0, 1; p = 0,
+    2 impacts) with a corrector that lands on the chord's mid-plane at its midpoint plus
+    ``offset`` the first time, then at the midpoint (impacts: 3 where u2 < 0.6, else 2)."""
+    from types import SimpleNamespace
+
+    from continuation.corners import check_crossing
+    from continuation.pathfollow import Point
+    tr = Tracer()
+    calls = []
+
+    def correct(prob, m, d, corr, fixed_p=False):
+        zs = m + (offset if not calls else 0.0)
+        calls.append(zs)
+        return zs, SimpleNamespace(n_impacts=3 if zs[1] < 0.6 else 2), 1
+
+    tr.correct = correct
+    tr._point = lambda prob, zs, evs: Point(u=zs[:-1], p=zs[-1], xmax=1.0, multipliers=None,
+                                            problem=None, n_impacts=evs.n_impacts)
+    z_a, z_b = np.zeros(3), np.array([0.0, 1.0, 0.0])
+    a = tr._point(None, z_a, SimpleNamespace(n_impacts=3))
+    b = tr._point(None, z_b, SimpleNamespace(n_impacts=2))
+    return check_crossing(tr, None, a, z_a, np.array([1.0, 0.0, 0.0]), b, z_b, strict=False)
+
+
+def test_a_bisection_that_runs_back_behind_the_near_point_joins_nothing():
+    """The bisection of the chord from a to b closes in on a grazing point only between a and
+    b. Where the mid-plane's corrector lands on a's own stretch behind a (against a's direction
+    of travel), the chord brackets no corner ahead of a and b lies on another strand: the
+    paper model's order-2 branch at 67.6267 Hz took a far-side solve at 67.6943 Hz on the
+    lower strand that way (the near side's bisection points at 67.6018 and 67.5913 Hz, behind
+    it) and skipped the fold at 67.6445 Hz and 0.1 Hz of branch. Run back, the gap still
+    closes (to 0.18 of the chord): before this check that was taken as joined."""
+    cr = _scripted_crossing(np.zeros(3))
+    assert cr is not None and cr.connected and cr.lo.n_impacts == 3 and cr.hi.n_impacts == 2
+    assert 0.5 <= cr.z_lo[1] < 0.6 <= cr.z_hi[1] and cr.gap < 0.01
+    assert _scripted_crossing(np.array([-0.5, 0.0, 0.0])) is None
+    # off the chord sideways or ahead of a (not behind it): still joined
+    assert _scripted_crossing(np.array([0.3, 0.0, 0.0])).connected
