@@ -308,7 +308,10 @@ class _Tracer:
         parabola that leaves the last point along its tangent and passes through the point
         before it (the tangent alone where there is none: the start, a rephased problem);
         its error is third order in the step, against second order for the tangent alone,
-        so the quasi-Newton corrector starts closer and longer steps converge."""
+        so the quasi-Newton corrector starts closer and longer steps converge. Not on a
+        grazing curve: there the longer steps it allows stepped over a fold-grazing point
+        (a sign change of the free-side multipliers' fold test between two points;
+        tests/continuation/test_fold_grazing_exact.py)."""
         s = self.s
         pts = []
         a = p0
@@ -325,7 +328,7 @@ class _Tracer:
                 return pts, "max_evaluations"
             z_pred = a.st.z + ds * a.t
             bend = None
-            if prev is not None and len(prev) == len(a.st.z):
+            if prev is not None and len(prev) == len(a.st.z) and not s.grazing:
                 # quadratic predictor: the parabola along the tangent through the last
                 # point back to the one before (the curvature term, if it is small)
                 h = float(np.linalg.norm(a.st.z - prev))
