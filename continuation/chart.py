@@ -147,7 +147,8 @@ def stability_chart(model, p_range, f_range, orders=(1, 2, 3), *, amplitude=None
     direction: a curve that reaches either is kept as far as it got, and listed in the
     warning; bifurcation_curve with max_evaluations=None extends it). A fold or period
     doubling located at a grazing point (non-smooth) is represented by the grazing curve
-    there. label_grid: (n_f, n_A) grid
+    there; one of an orbit of a lower order taken several times round (a branch of order 2
+    along an order-1 orbit) by that order's curve (_duplicate). label_grid: (n_f, n_A) grid
     points (log-spaced) where the attractor reached from rest is classified by its order
     (attractor_order); (0, 0) for none. progress: callable(str) or None. Returns a
     StabilityChart; one ContinuationWarning lists the starts that could not be traced.
