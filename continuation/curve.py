@@ -304,10 +304,19 @@ class _Tracer:
 
     def trace(self, p0, on_step):
         """Points from p0 (excluded) on, and the reason the trace stopped. on_step(a, b):
-        called for each accepted step (codimension-2 detection)."""
+        called for each accepted step (codimension-2 detection). The predictor is the
+        parabola that leaves the last point along its tangent and passes through the point
+        before it (the tangent alone where there is none: the start, a rephased problem);
+        its error is third order in the step, against second order for the tangent alone,
+        so the quasi-Newton corrector starts closer and longer steps converge. Not on a
+        grazing curve: there the longer steps it allows stepped over a fold-grazing point
+        (a sign change of the free-side multipliers' fold test between two points;
+        tests/continuation/test_fold_grazing_exact.py)."""
         s = self.s
         pts = []
         a = p0
+        prev = None  # the point before a (scaled unknowns), for the quadratic predictor
+        quad = True  # the quadratic predictor was the closer one on the last step
         ds = self.ds0
         ds_fail = None  # the last step that failed (growth stays below it for a while)
         n0 = s.n_evaluations
@@ -318,6 +327,17 @@ class _Tracer:
             if self.max_evaluations and s.n_evaluations - n0 >= self.max_evaluations:
                 return pts, "max_evaluations"
             z_pred = a.st.z + ds * a.t
+            bend = None
+            if prev is not None and len(prev) == len(a.st.z) and not s.grazing:
+                # quadratic predictor: the parabola along the tangent through the last
+                # point back to the one before (the curvature term, if it is small)
+                h = float(np.linalg.norm(a.st.z - prev))
+                if h > 0:
+                    bend = ds * ds * (prev - a.st.z + h * a.t) / h ** 2
+                    if np.linalg.norm(bend) >= 0.5 * ds:
+                        bend = None
+            if bend is not None and quad:
+                z_pred = z_pred + bend
             try:
                 # impatient (one renewal) while the step is long, patient when it is short:
                 # a step that fails is cheaper halved than iterated on, but a short step
@@ -334,6 +354,12 @@ class _Tracer:
                     return pts, "step underflow"
                 continue
             b = self.make_point(st, t)
+            if bend is not None:
+                # the predictor for the next step: the one that came closer on this one
+                # (on a smooth curve the parabola; where the curve bends at kinks, e.g.
+                # along a grazing curve, the tangent may)
+                z_tan = a.st.z + ds * a.t
+                quad = (np.linalg.norm(st.z - z_tan - bend) < np.linalg.norm(st.z - z_tan))
             hit = self._cross_targets(a, b)
             if hit is not None:
                 k, q, why = hit
@@ -344,6 +370,12 @@ class _Tracer:
                                           * (b.st.z - a.st.z), row, q, b.st.J)
                     b = self.make_point(st2, _tangent(st2.J, a.t), exact=True)
                 except ConvergenceError:
+                    if ds > 0.1 * self.ds0:
+                        # the chord's interpolation too far from the curve (a long step on
+                        # a bending curve): the step again, shorter
+                        ds_fail = ds
+                        ds *= 0.5
+                        continue
                     if why:
                         return pts, why
                     # a requested value not placed exactly: keep the plain step
@@ -352,7 +384,7 @@ class _Tracer:
                     pts.append(b)
                     if why:
                         return pts, why
-                    a = b
+                    prev, a = a.st.z, b
                     continue
             if min(self._bounds(b.st.z)) < 0:
                 return pts, hit[2] if hit else "left the range"
@@ -364,6 +396,7 @@ class _Tracer:
                     and (b.st.z - z_start) @ p0.t < 0 <= (a.st.z - z_start) @ p0.t + 1e-300)):
                 return pts, "closed"
             t_plane = b.t[s.n:s.n + 2].copy()
+            rephased = False
             new = s.adapt(b.st.z)
             if new is not None:
                 st3 = s.evaluate(new)
@@ -373,6 +406,7 @@ class _Tracer:
                     t3 = -t3
                 b = self.make_point(st3, t3, b.exact)
                 pts[-1] = b
+                rephased = True  # no previous point in these unknowns
             elif it > 6:
                 # new borders only when the corrector struggled: the point's Jacobian, which
                 # starts the next corrector, holds the test function's row for the borders
@@ -384,6 +418,7 @@ class _Tracer:
             if ds_fail is not None:  # not back to a step that failed: grow below it
                 ds = min(ds, 0.7 * ds_fail)
                 ds_fail = ds_fail * 1.2 if ds_fail * 1.2 < self.ds_max else None
+            prev = None if rephased else a.st.z
             a = b
 
 

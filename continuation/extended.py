@@ -174,6 +174,7 @@ class CurveSystem:
         self.grazing = kind == "grazing"
         self.D = self.n + 2 + (1 if self.grazing else 0)
         self.n_evaluations = 0
+        self._last = None  # (problem, z bytes, with monodromy, Evaluation): _evaluate
         z = np.r_[u0 / self.prob.scale_u, math.log(frequency), self.q_of(p0)]
         if self.grazing:
             self.element, phase = self._grazing_start(u0, frequency, p0, element, phase)
@@ -212,11 +213,19 @@ class CurveSystem:
 
     # --- pieces --------------------------------------------------------------------------------
     def _evaluate(self, z, jac):
-        """The shooting evaluation at z: R, with jac dR/du and the monodromy (no dR/df)."""
+        """The shooting evaluation at z: R, with jac dR/du and the monodromy (no dR/df). The
+        last one is kept and given again for the same z and problem (the corrector's last
+        iterate is where the point's Jacobian and the new borders are evaluated next)."""
         u, f, p = self.unpack(z)
         self._set(p)
+        key = z.tobytes()
+        last = self._last
+        if last is not None and last[0] is self.prob and last[1] == key and (last[2] or not jac):
+            return last[3]
         self.n_evaluations += 1
-        return self.prob.evaluate(u, f, jac=jac, jac_p=False)
+        ev = self.prob.evaluate(u, f, jac=jac, jac_p=False)
+        self._last = (self.prob, key, jac, ev)
+        return ev
 
     def _monodromy(self, z):
         ev = self._evaluate(z, True)
@@ -357,6 +366,7 @@ class CurveSystem:
             J[n, i] = (bordered(singular_matrix(self.kind, Mp), self.b, self.c) - extra[0]) / h
             if i in (n, n + 1):
                 J[:n, i] = (evp.R - ev.R) / (h * w)
+        self._last = (self.prob, z.tobytes(), True, ev)  # the point's, not the last column's
         return CurveState(z.copy(), G, J, mu, float(ev.xmax), int(ev.n_impacts))
 
     def _multipliers_of(self, z, ev):
@@ -415,6 +425,7 @@ class CurveSystem:
 
     def restore(self, snap):
         self.prob, self.n, self.D, self.b, self.c, self.z0 = snap
+        self._last = None
 
     def renew_borders(self, z):
         """New bordering vectors at z (keeps the bordered matrix well conditioned)."""
@@ -430,6 +441,7 @@ class CurveSystem:
         new = self.prob.adapt(u, f)
         if new is None:
             return None
+        self._last = None
         tail = z[self.n:]
         self.prob, u2 = new
         self.n = self.prob.n
