@@ -2,7 +2,7 @@
 roots of the step map."""
 from .codes import ERR_EVENT
 from .excite import excite, excite_yyd
-from .field import kinematics
+from .field import kinematics, kinematics_inline
 from .hook import njit
 from .steps import rk_step_free
 
@@ -173,6 +173,26 @@ def _may_cross_at(e, y0, yd0, y1, yd1, s, s_new, disc, sysa):
         dd0 += ew[e, j] * s[N + j]
         dd1 += ew[e, j] * s_new[N + j]
     return sign * d1 > 0.0 or (sign * dd0 > 0.0 and sign * dd1 < 0.0)
+
+
+@njit(cache=True, inline="always")
+def _no_boundary_at(e, t, h, y0, yd0, y1, yd1, s, s_new, f0, f1, disc, sysa, xc, xp, xtab):
+    """True where ``_crossing(e, t, h, ...)`` certainly reports no boundary, decided by its
+    own expressions (the same decision bit for bit), the excitation (y, y') at the step's ends
+    given: delta_e at the end on the element's side, and where delta_e has an extremum
+    towards the boundary inside the step, that extremum on the dense output
+    (``delta_extremum``, the same call) below ``_crossing``'s threshold. For routine.py: a
+    swing of delta towards the stop that stays far from it no longer leaves the lean loop."""
+    if not _may_cross_at(e, y0, yd0, y1, yd1, s, s_new, disc, sysa):
+        return True
+    sign = -1.0 if disc[e, 0] != 0.0 else 1.0
+    d0, dd0 = kinematics_inline(e, s, y0, yd0, sysa)
+    d1, dd1 = kinematics_inline(e, s_new, y1, yd1, sysa)
+    if sign * d1 > 0.0:
+        return False
+    # here _may_cross_at found sign * dd0 > 0 > sign * dd1: _crossing's extremum check
+    th, dmh = delta_extremum(e, sign, t, h, s, s_new, f0, f1, sysa, xc, xp, xtab)
+    return not sign * dmh > -1e-3 * max(abs(d0), abs(d1))
 
 
 @njit(cache=True)

@@ -178,6 +178,27 @@ def excite_yyd(t, code, p, tab):
     return y, yd, 0
 
 
+@njit(cache=True, inline="always")
+def excite_yyd_inline(t, code, p, tab):
+    """``excite_yyd`` inlined (numba IR) where it is called in every step (routine.py): a
+    coefficient table (code 4) and a cubic table (code 1) by the same expressions (the same
+    y, y' bit for bit) without the call, which passes both arrays exploded into ~16 scalar
+    arguments; any other code calls ``excite_yyd``."""
+    if code == 4:
+        i, th, st = _coef_cell(t, p, tab)
+        if st != 0:
+            return 0.0, 0.0, st
+        y, yd = _coef_y_yd(i, th, tab)
+        return y, yd, 0
+    if code == 1:
+        i, th, th2, th3, h, st = _table_cell(t, p, tab)
+        if st != 0:
+            return 0.0, 0.0, st
+        y, yd, nan_ydd = _table_y_yd(i, th, th2, th3, h, tab)
+        return y, yd, 0
+    return excite_yyd(t, code, p, tab)
+
+
 @njit(cache=True)
 def excite_jerk(t, code, p, tab):
     """y''' at time t: the derivative of the y'' that ``excite`` returns (0 on a sampled table

@@ -17,8 +17,8 @@ import numpy as np
 
 from .codes import _RA21, _RA32, _RA43, _R3, _R6, _RC2, _RC4, ERR_NONFINITE
 from .contact import _contact_rate_at
-from .events import _may_cross_at
-from .excite import excite_yyd
+from .events import _no_boundary_at
+from .excite import excite_yyd, excite_yyd_inline
 from .field import _deriv_plain_at, has_event, kinematics_inline
 from .hook import njit
 from .samples import grid_samples, track_xmax_step
@@ -34,7 +34,7 @@ def _rk4_shared(t, h, s, disc, sysa, xc, xp, xtab, f0, s_out, KS, ytmp, fel):
         KS[0, q] = f0[q]
     for q in range(n):
         ytmp[q] = s[q] + h * _RA21 * KS[0, q]
-    y2, yd2, st = excite_yyd(t + _RC2 * h, xc, xp, xtab)
+    y2, yd2, st = excite_yyd_inline(t + _RC2 * h, xc, xp, xtab)
     if st != 0:
         return st, 0.0, 0.0
     _deriv_plain_at(y2, yd2, ytmp, disc, sysa, KS[1], fel)
@@ -43,7 +43,7 @@ def _rk4_shared(t, h, s, disc, sysa, xc, xp, xtab, f0, s_out, KS, ytmp, fel):
     _deriv_plain_at(y2, yd2, ytmp, disc, sysa, KS[2], fel)
     for q in range(n):
         ytmp[q] = s[q] + h * _RA43 * KS[2, q]
-    y4, yd4, st = excite_yyd(t + _RC4 * h, xc, xp, xtab)
+    y4, yd4, st = excite_yyd_inline(t + _RC4 * h, xc, xp, xtab)
     if st != 0:
         return st, 0.0, 0.0
     _deriv_plain_at(y4, yd4, ytmp, disc, sysa, KS[3], fel)
@@ -118,7 +118,8 @@ def routine_steps(sysa, xc, xp, xtab, t0, t_end, dt, n_grid, max_steps, events_o
         _deriv_plain_at(y1, yd1, s_new, disc, sysa, f1, fel)
         hh = t_new - t
         if events_on:
-            # loop.py's _may_cross(e, t, t_new - t, ...): the excitation at t + (t_new - t)
+            # loop.py's _may_cross and _crossing (e, t, t_new - t, ...) where they find no
+            # boundary: the excitation at t + (t_new - t)
             if t + hh == t_new:
                 ye = y1
                 yde = yd1
@@ -126,8 +127,9 @@ def routine_steps(sysa, xc, xp, xtab, t0, t_end, dt, n_grid, max_steps, events_o
                 ye, yde, st = excite_yyd(t + hh, xc, xp, xtab)
             cross = False
             for e in range(ne):
-                if has_event(etype[e]) and _may_cross_at(e, y0, yd0, ye, yde, s, s_new, disc,
-                                                         sysa):
+                if has_event(etype[e]) and not _no_boundary_at(e, t, hh, y0, yd0, ye, yde, s,
+                                                               s_new, f0, f1, disc, sysa, xc,
+                                                               xp, xtab):
                     cross = True
                     break
             if cross:

@@ -117,3 +117,32 @@ def test_routine_steps_in_a_flow_map(monkeypatch):
         for name in ("state", "disc", "xmax"):
             assert np.array_equal(getattr(a, name), getattr(b, name)), name
         assert (a.n_steps, a.n_rhs, a.n_impacts) == (b.n_steps, b.n_rhs, b.n_impacts)
+
+
+def test_swings_far_from_the_stop_stay_in_the_routine_loop(monkeypatch):
+    """delta has several maxima in this run (a three-tone table, a stop 1 m away): the
+    lean loop decides these steps by _crossing's own extremum check, so it takes every step,
+    and the trajectory is the general loop's bit for bit. With the stop 0.1 mm away, steps
+    where delta crosses or comes near the stop are handed back to the general loop."""
+    model = nlbeam.BeamImpact.paper()
+    far = nlbeam.System([[model.m]], [[model.b]], [[model.k]],
+                        (nlbeam.Contact(0, "lankarani-nikravesh", model.K_hertz, e=0.5,
+                                        gap=1.0),), "base", y_load=[model.k], yd_load=[model.b])
+    table = _noise_table()
+    for graded in (True, False):
+        a = _trajectory(monkeypatch, True, far, table, 0.25, graded=graded, store_every=1)
+        b = _trajectory(monkeypatch, False, far, table, 0.25, graded=graded, store_every=1)
+        _same_trajectory(a, b)
+        assert a.n_impacts == 0
+    # delta's maxima in the run (from the grid samples): each one a step the general loop
+    # checks on the dense output
+    dd = np.diff(a.delta[:, 0])
+    assert np.count_nonzero((dd[:-1] > 0.0) & (dd[1:] <= 0.0)) >= 5
+    steps, routine = _routine_count(monkeypatch, True, far, table, 0.25, True)
+    assert routine == steps, (steps, routine)
+    near = nlbeam.System([[model.m]], [[model.b]], [[model.k]],
+                         (nlbeam.Contact(0, "lankarani-nikravesh", model.K_hertz, e=0.5,
+                                         gap=1e-4),), "base", y_load=[model.k],
+                         yd_load=[model.b])
+    steps, routine = _routine_count(monkeypatch, True, near, table, 0.25, True)
+    assert 0 < routine < steps, (steps, routine)
