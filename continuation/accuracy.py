@@ -4,14 +4,23 @@ with the step refined, and the difference taken as the measure of the error.
 A *level* k is the integrator with the free-flight step and the contact step both divided by
 2^k (``Integrator.refined``; for the adaptive method rtol and atol divided by 32^k).
 
-Orbits (``orbit_error``; every PeriodicSolution, and every 10th point of a diagram's branches
-in ``branch_errors``): the orbit is solved again at level 1 at the same parameter; the error of
-its xmax and multipliers is stated as ``SAFETY`` = 2 times the change. For a method converging
-at order q >= 1 the error of the level-0 value is |change| / (1 - 2^-q) <= 2 |change|; measured
-against converged values (tests/continuation/test_accuracy.py) the true error is 0.5-0.7 of
-the stated one on the paper model, Duffing, a 2-DOF system and a piecewise-linear stop. This
-covers whatever the error's cause: the discretization of the flow, and the variational
-monodromy's difference from the derivative of the fixed-step map.
+Orbits (``orbit_error``; every PeriodicSolution): the orbit is solved again at level 1 at the
+same parameter; the error of its xmax and multipliers is stated as ``SAFETY`` = 2 times the
+change. For a method converging at order q >= 1 the error of the level-0 value is
+|change| / (1 - 2^-q) <= 2 |change|; measured against converged values
+(tests/continuation/test_accuracy.py) the true error is 0.5-0.7 of the stated one on the paper
+model, Duffing, a 2-DOF system and a piecewise-linear stop. This covers whatever the error's
+cause: the discretization of the flow, and the variational monodromy's difference from the
+derivative of the fixed-step map.
+
+Branch points of a diagram (``branch_errors``): every point is carried to level 1 by one Newton
+step of the level-1 map (``refined_point``), and the diagram reports the level-1 multipliers
+(and stability flags), stated error half their change (order >= 1.6 assumed; measured order
+4: their true error is 0.04-0.13 of the change), xmax stays the level-0 value (error SAFETY
+times its change). The multipliers' error at the defaults comes from the contact steps (32
+per contact; halving dt alone leaves it, benchmarks/multiplier_error_sources.py), so level 1
+takes it from 1e-4 to 5e-6 on the paper model at 10.5-12 Hz at the cost of two evaluations
+with monodromy at half the steps per point; every point is estimated, none interpolated.
 
 Bifurcations (``bifurcation_levels``) are located again at levels 1, 2, ...: period doublings
 and Neimark-Sacker points by the secant method in the parameter on the critical multiplier (a
@@ -590,44 +599,82 @@ def corner_indices(branch, bifurcations, index):
     return sorted(out)
 
 
-def branch_errors(model, branch, integrator, *, every=10, corners=()):
-    """Error estimates of a Branch's xmax (m) and multipliers at every ``every``-th point, the
-    two ends and both sides of every corner (``corners``: see ``corner_indices``; next to a
-    corner the error changes abruptly, and an estimate interpolated across it does not bound
-    the error), computed by ``orbit_error`` after the point is solved again at the branch's
-    integrator; the multipliers' as the largest over the point's multipliers of
-    error / max(1, |mu|) (absolute inside the unit circle, relative outside). Between sampled
-    points each point gets the larger estimate of its two nearest sampled neighbours along the
-    branch. Returns
-    (xmax_error (n,), multipliers_error (n,) or None without stability, sampled (n,) bool:
-    where the estimate was computed, not interpolated). A sample whose refined solve fails
-    (next to a fold) is left out."""
+def refined_point(prob, u, p, mu0, *, newton_limit=1e-3):
+    """The orbit u of prob at p (converged at prob's integrator, multipliers mu0) carried to
+    level 1 by one Newton step of the level-1 map from u (two evaluations with monodromy: the
+    orbit moves by its discretization error, ~1e-6 of its scale on the paper model, and the
+    multipliers at level 1 on the unmoved orbit are off by as much as the change itself; one
+    step leaves 1e-8 of it, measured as equal to a fully converged level-1 solve to 2
+    digits). Returns (xmax at level 1, multipliers at level 1, largest modulus first, or None
+    without mu0). Raises ConvergenceError where the step exceeds ``newton_limit`` of the
+    orbit's scale (no orbit of the level-1 map nearby, e.g. next to a fold)."""
+    fine = at_level(prob, 1)
+    ev = fine.evaluate(u, p, jac=True, jac_p=False)
+    try:
+        du = np.linalg.solve(ev.Ju, -ev.R)
+    except np.linalg.LinAlgError:
+        raise ConvergenceError("level 1: singular Jacobian") from None
+    if not np.all(np.isfinite(du)) or np.max(np.abs(du / prob.scale_u)) > newton_limit:
+        raise ConvergenceError("level 1: no orbit of the refined map next to this one")
+    ev = fine.evaluate(u + du, p, jac=mu0 is not None, jac_p=False)
+    mu1 = fine.multipliers(ev.Ms) if (mu0 is not None and ev.Ms) else None
+    return float(ev.xmax), mu1
+
+
+def branch_errors(model, branch, integrator, *, every=1, corners=()):
+    """Error estimates of a Branch's xmax (m) and multipliers, and its multipliers (and
+    stability flags) carried to level 1, at every ``every``-th point (default: every point),
+    the two ends and both sides of every corner (``corners``: see ``corner_indices``).
+
+    At each such point the stored orbit is carried to level 1 (``refined_point``: one Newton
+    step, two evaluations with monodromy at half the steps). xmax stays the level-0 value,
+    its error SAFETY times the change (as ``orbit_error``). The multipliers reported become
+    the level-1 ones, their error half the change (the convention of ``combine``: order >=
+    1.6; measured 4, the level-1 error 0.04-0.13 of the change on the paper model at 10.5-60
+    Hz, Duffing, a 2-DOF Hertz system and a piecewise-linear stop), as the largest over the
+    point's multipliers of error / max(1, |mu|), never below 1e-10. A point whose level-1
+    orbit is not found (next to a fold) keeps its level-0 multipliers; it and, with every >
+    1, the points between samples get the larger level-0 estimate (SAFETY times the change)
+    of their two nearest computed neighbours along the branch. Returns (xmax_error (n,),
+    multipliers_error (n,) or None without stability, sampled (n,) bool: where computed,
+    multipliers (n, 2N) or None, stable (n,) or None: the branch's with the level-1 values
+    where computed)."""
     n = len(branch.values)
     xe = np.full(n, np.nan)
-    me = np.full(n, np.nan)
+    me = np.full(n, np.nan)  # the error of the reported (level-1) multipliers
+    me0 = np.full(n, np.nan)  # the error of the level-0 multipliers
     sampled = np.zeros(n, dtype=bool)
+    has_mu = branch.multipliers is not None
+    mus = np.array(branch.multipliers, copy=True) if has_mu else None
     for i in sample_indices(n, every, corners):
         try:
             prob, u, p = _branch_problem(model, branch, i, integrator)
-            ev = prob.evaluate(u, p, jac=True, jac_p=False)
-            if np.max(np.abs(ev.R / prob.scale_u)) > 1e-9:  # not the stored discretization
+            xm0, mu0 = float(branch.xmax[i]), (mus[i] if has_mu else None)
+            r = prob.evaluate(u, p, jac=False, jac_p=False).R
+            if np.max(np.abs(r / prob.scale_u)) > 1e-9:  # not the stored discretization
                 u, ev, _, _ = prob.solve(u, p, max_iter=6)
-            mu = prob.multipliers(ev.Ms) if ev.Ms else None
-            oe = orbit_error(prob, u, p, ev.xmax, mu, max_iter=8)
-        except (ConvergenceError, ValueError):
+                xm0 = float(ev.xmax)
+                mu0 = prob.multipliers(ev.Ms) if (has_mu and ev.Ms) else None
+            xm1, mu1 = refined_point(prob, u, p, mu0)
+        except (ConvergenceError, ValueError, nlbeam.IntegrationError):
             continue
-        xe[i] = oe.xmax
-        if oe.multipliers is not None:
-            me[i] = float(np.max(oe.multipliers / np.maximum(1.0, np.abs(mu))))
+        xe[i] = SAFETY * abs(xm0 - xm1)
+        if has_mu and mu0 is not None and mu1 is not None:
+            d = np.abs(mu1 - match_multipliers(mu1, mu0)) / np.maximum(1.0, np.abs(mu1))
+            me[i] = max(0.5 * float(np.max(d)), 1e-10)
+            me0[i] = SAFETY * float(np.max(d))
+            mus[i] = mu1
         sampled[i] = True
     idx = np.nonzero(sampled)[0]
     if idx.size:
         left = np.searchsorted(idx, np.arange(n), side="right") - 1
         right = np.minimum(left + 1, idx.size - 1)
         left = np.maximum(left, 0)
-        for arr in (xe, me):
-            arr[~sampled] = np.fmax(arr[idx[left]], arr[idx[right]])[~sampled]
-    return xe, (me if branch.multipliers is not None else None), sampled
+        xe[~sampled] = np.fmax(xe[idx[left]], xe[idx[right]])[~sampled]
+        me[~sampled] = np.fmax(me0[idx[left]], me0[idx[right]])[~sampled]
+    if not has_mu:
+        return xe, None, sampled, None, None
+    return xe, me, sampled, mus, np.abs(mus[:, 0]) < 1.0
 
 
 def _short(values, n=8):
@@ -652,7 +699,7 @@ class Early:
     point's bracket may be widened by a later merge), so the numbers are those of the serial
     estimate."""
 
-    def __init__(self, pool, model, integrator, parameter, accuracy, segments, every=10,
+    def __init__(self, pool, model, integrator, parameter, accuracy, segments, every=1,
                  max_levels=4, grazing_levels=1):
         self.pool, self.model, self.integrator = pool, model, integrator
         self.parameter, self.segments, self.every = parameter, segments, every
@@ -705,7 +752,7 @@ def _job_key(bf, grazing):
             raw(bf.disc0), bf.multipliers is None)
 
 
-def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segments=1,
+def estimate_diagram(frc, model, integrator, *, accuracy=None, every=1, segments=1,
                      max_levels=4, grazing_levels=1, pool=None, early=None):
     """Attach error estimates to a diagram computed with ``integrator``, in place: each Branch
     gets xmax_error, multipliers_error and error_sampled (``branch_errors``); each fold, period
@@ -733,8 +780,10 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=10, segment
                                              corners[bi]) for bi in todo])))
     errs = [errs[bi] if bi in errs else early_b[bi][2].result()
             for bi in range(len(frc.branches))]
-    for bi, (b, (xe, me, sm)) in enumerate(zip(frc.branches, errs)):
+    for bi, (b, (xe, me, sm, mus, stable)) in enumerate(zip(frc.branches, errs)):
         b.xmax_error, b.multipliers_error, b.error_sampled = xe, me, sm
+        if mus is not None:
+            b.multipliers, b.stable = mus, stable
         if me is None or not sm.any():
             continue
         n_tot += int(sm.sum())
