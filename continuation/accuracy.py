@@ -599,29 +599,38 @@ def corner_indices(branch, bifurcations, index):
     return sorted(out)
 
 
-def refined_point(prob, u, p, mu0, *, newton_limit=1e-3):
-    """The orbit u of prob at p (converged at prob's integrator, multipliers mu0) carried to
-    level 1 by one Newton step of the level-1 map from u (two evaluations with monodromy: the
-    orbit moves by its discretization error, ~1e-6 of its scale on the paper model, and the
-    multipliers at level 1 on the unmoved orbit are off by as much as the change itself; one
-    step leaves 1e-8 of it, measured as equal to a fully converged level-1 solve to 2
-    digits). Returns (xmax at level 1, multipliers at level 1, largest modulus first, or None
-    without mu0). Raises ConvergenceError where the step exceeds ``newton_limit`` of the
-    orbit's scale (no orbit of the level-1 map nearby, e.g. next to a fold)."""
-    fine = at_level(prob, 1)
+def refined_point(prob, u, p, mu0, *, level=1, newton_limit=1e-3):
+    """The orbit u of prob at p (converged at prob's integrator or at level - 1 of it; mu0:
+    its multipliers, None without) carried to ``level`` by one Newton step of that level's map
+    from u (two evaluations with monodromy: the orbit moves by its discretization error,
+    ~1e-6 of its scale on the paper model, and the multipliers on the unmoved orbit are off by
+    as much as their change itself; after one step they equal a fully converged solve to 2
+    digits, measured). Returns (xmax, multipliers largest modulus first or None, the moved
+    u). Where the step exceeds ``newton_limit`` of the orbit's scale (next to a fold or a
+    corner) Newton is run to convergence; raises ConvergenceError where that fails."""
+    fine = at_level(prob, level)
     ev = fine.evaluate(u, p, jac=True, jac_p=False)
     try:
         du = np.linalg.solve(ev.Ju, -ev.R)
     except np.linalg.LinAlgError:
-        raise ConvergenceError("level 1: singular Jacobian") from None
+        du = np.full_like(u, np.nan)
     if not np.all(np.isfinite(du)) or np.max(np.abs(du / prob.scale_u)) > newton_limit:
-        raise ConvergenceError("level 1: no orbit of the refined map next to this one")
+        # a large step (next to a fold or a corner): Newton to convergence instead
+        u1, ev, _, _ = fine.solve(u, p, tol=1e-10, max_iter=8)
+        mu1 = fine.multipliers(ev.Ms) if (mu0 is not None and ev.Ms) else None
+        return float(ev.xmax), mu1, u1
     ev = fine.evaluate(u + du, p, jac=mu0 is not None, jac_p=False)
     mu1 = fine.multipliers(ev.Ms) if (mu0 is not None and ev.Ms) else None
-    return float(ev.xmax), mu1
+    return float(ev.xmax), mu1, u + du
 
 
-def branch_errors(model, branch, integrator, *, every=1, corners=()):
+def _change(mu_new, mu_old):
+    """Largest |mu_new - mu_old| / max(1, |mu_new|) over the multipliers (matched)."""
+    d = np.abs(mu_new - match_multipliers(mu_new, mu_old)) / np.maximum(1.0, np.abs(mu_new))
+    return float(np.max(d))
+
+
+def branch_errors(model, branch, integrator, *, every=1, corners=(), target=1e-5, levels=2):
     """Error estimates of a Branch's xmax (m) and multipliers, and its multipliers (and
     stability flags) carried to level 1, at every ``every``-th point (default: every point),
     the two ends and both sides of every corner (``corners``: see ``corner_indices``).
@@ -629,10 +638,12 @@ def branch_errors(model, branch, integrator, *, every=1, corners=()):
     At each such point the stored orbit is carried to level 1 (``refined_point``: one Newton
     step, two evaluations with monodromy at half the steps). xmax stays the level-0 value,
     its error SAFETY times the change (as ``orbit_error``). The multipliers reported become
-    the level-1 ones, their error half the change (the convention of ``combine``: order >=
-    1.6; measured 4, the level-1 error 0.04-0.13 of the change on the paper model at 10.5-60
-    Hz, Duffing, a 2-DOF Hertz system and a piecewise-linear stop), as the largest over the
-    point's multipliers of error / max(1, |mu|), never below 1e-10. A point whose level-1
+    the level-1 ones, their error the change (a bound for order >= 1; measured order 4: the
+    level-1 error 0.04-0.13 of the change on the paper model at 10.5-60 Hz, Duffing, a 2-DOF
+    Hertz system and a piecewise-linear stop), as the largest over the point's multipliers of
+    error / max(1, |mu|), never below 1e-10. Where that exceeds ``target`` the point is
+    carried on to level 2 (up to ``levels``) and reports those multipliers, error the last
+    change where it fell at least 4-fold, else twice the larger change. A point whose level-1
     orbit is not found (next to a fold) keeps its level-0 multipliers; it and, with every >
     1, the points between samples get the larger level-0 estimate (SAFETY times the change)
     of their two nearest computed neighbours along the branch. Returns (xmax_error (n,),
@@ -655,16 +666,30 @@ def branch_errors(model, branch, integrator, *, every=1, corners=()):
                 u, ev, _, _ = prob.solve(u, p, max_iter=6)
                 xm0 = float(ev.xmax)
                 mu0 = prob.multipliers(ev.Ms) if (has_mu and ev.Ms) else None
-            xm1, mu1 = refined_point(prob, u, p, mu0)
+            xm1, mu1, u1 = refined_point(prob, u, p, mu0)
         except (ConvergenceError, ValueError, nlbeam.IntegrationError):
             continue
         xe[i] = SAFETY * abs(xm0 - xm1)
-        if has_mu and mu0 is not None and mu1 is not None:
-            d = np.abs(mu1 - match_multipliers(mu1, mu0)) / np.maximum(1.0, np.abs(mu1))
-            me[i] = max(0.5 * float(np.max(d)), 1e-10)
-            me0[i] = SAFETY * float(np.max(d))
-            mus[i] = mu1
         sampled[i] = True
+        if not (has_mu and mu0 is not None and mu1 is not None):
+            continue
+        d = _change(mu1, mu0)
+        me0[i] = SAFETY * d
+        err = d  # level 1: err1 = d / (2^q - 1) <= d for order q >= 1
+        for k in range(2, levels + 1):
+            if err <= target:
+                break
+            try:
+                _, mu_k, u1 = refined_point(prob, u1, p, mu1, level=k)
+            except (ConvergenceError, ValueError, nlbeam.IntegrationError):
+                break
+            d_k = _change(mu_k, mu1)
+            # converging at order >= 2 (changes falling 4-fold): the last change bounds the
+            # error; else (a corner, chattering) twice the larger change
+            err = d_k if d_k <= d / 4 else 2.0 * max(d, d_k)
+            d, mu1 = d_k, mu_k
+        me[i] = max(err, 1e-10)
+        mus[i] = mu1
     idx = np.nonzero(sampled)[0]
     if idx.size:
         left = np.searchsorted(idx, np.arange(n), side="right") - 1
@@ -683,8 +708,9 @@ def _short(values, n=8):
 
 
 def _branch_job(args):
-    model, branch, integrator, every, corners = args
-    return branch_errors(model, branch, integrator, every=every, corners=corners)
+    model, branch, integrator, every, corners, target = args
+    return branch_errors(model, branch, integrator, every=every, corners=corners,
+                         target=target)
 
 
 def _levels_job(args):
@@ -713,7 +739,8 @@ class Early:
         afterwards; its corners are taken from ``bifurcations``, see corner_indices)."""
         corners = corner_indices(branch, bifurcations, index)
         self.branches[index] = (branch, corners, self.pool.submit(
-            _branch_job, (self.model, branch, self.integrator, self.every, corners)))
+            _branch_job, (self.model, branch, self.integrator, self.every, corners,
+                          multiplier_target(self.digits))))
 
     def bifurcation(self, amplitude, bf):
         """Start locating a Bifurcation just added at the finer levels (a copy: the diagram
@@ -777,7 +804,7 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=1, segments
     todo = [bi for bi, b in enumerate(frc.branches)
             if bi not in early_b or early_b[bi][0] is not b or early_b[bi][1] != corners[bi]]
     errs = dict(zip(todo, run(_branch_job, [(model, frc.branches[bi], integrator, every,
-                                             corners[bi]) for bi in todo])))
+                                             corners[bi], mt) for bi in todo])))
     errs = [errs[bi] if bi in errs else early_b[bi][2].result()
             for bi in range(len(frc.branches))]
     for bi, (b, (xe, me, sm, mus, stable)) in enumerate(zip(frc.branches, errs)):
