@@ -601,29 +601,32 @@ def corner_indices(branch, bifurcations, index):
     return sorted(out)
 
 
-def refined_point(prob, u, p, mu0, *, level=1, newton_limit=1e-3):
+def refined_point(prob, u, p, mu0, *, level=1, jac=None, newton_limit=1e-3):
     """The orbit u of prob at p (converged at prob's integrator or at level - 1 of it; mu0:
     its multipliers, None without) carried to ``level`` by one Newton step of that level's map
-    from u (two evaluations with monodromy: the orbit moves by its discretization error,
-    ~1e-6 of its scale on the paper model, and the multipliers on the unmoved orbit are off by
-    as much as their change itself; after one step they equal a fully converged solve to 2
-    digits, measured). Returns (xmax, multipliers largest modulus first or None, the moved
-    u). Where the step exceeds ``newton_limit`` of the orbit's scale (next to a fold or a
-    corner) Newton is run to convergence; raises ConvergenceError where that fails."""
+    from u, with the Jacobian ``jac`` of the coarser level at u if given (one evaluation
+    without and one with monodromy; else two with). The orbit moves by its discretization
+    error, ~1e-6 of its scale on the paper model, and the multipliers on the unmoved orbit are
+    off by as much as their change itself; after the step they equal a fully converged solve
+    to 2 digits (measured). Returns (xmax, multipliers largest modulus first or None, the
+    moved u, its Jacobian or None). Where the step exceeds ``newton_limit`` of the orbit's
+    scale (next to a fold or a corner) Newton is run to convergence; raises ConvergenceError
+    where that fails."""
     fine = at_level(prob, level)
-    ev = fine.evaluate(u, p, jac=True, jac_p=False)
+    ev = fine.evaluate(u, p, jac=jac is None, jac_p=False)
     try:
-        du = np.linalg.solve(ev.Ju, -ev.R)
+        du = np.linalg.solve(ev.Ju if jac is None else jac, -ev.R)
     except np.linalg.LinAlgError:
         du = np.full_like(u, np.nan)
+    want = mu0 is not None
     if not np.all(np.isfinite(du)) or np.max(np.abs(du / prob.scale_u)) > newton_limit:
         # a large step (next to a fold or a corner): Newton to convergence instead
         u1, ev, _, _ = fine.solve(u, p, tol=1e-10, max_iter=8)
-        mu1 = fine.multipliers(ev.Ms) if (mu0 is not None and ev.Ms) else None
-        return float(ev.xmax), mu1, u1
-    ev = fine.evaluate(u + du, p, jac=mu0 is not None, jac_p=False)
-    mu1 = fine.multipliers(ev.Ms) if (mu0 is not None and ev.Ms) else None
-    return float(ev.xmax), mu1, u + du
+    else:
+        u1 = u + du
+        ev = fine.evaluate(u1, p, jac=want, jac_p=False)
+    mu1 = fine.multipliers(ev.Ms) if (want and ev.Ms) else None
+    return float(ev.xmax), mu1, u1, ev.Ju
 
 
 def _change(mu_new, mu_old):
@@ -663,12 +666,12 @@ def branch_errors(model, branch, integrator, *, every=1, corners=(), target=1e-5
         try:
             prob, u, p = _branch_problem(model, branch, i, integrator)
             xm0, mu0 = float(branch.xmax[i]), (mus[i] if has_mu else None)
-            r = prob.evaluate(u, p, jac=False, jac_p=False).R
-            if np.max(np.abs(r / prob.scale_u)) > 1e-9:  # not the stored discretization
+            ev = prob.evaluate(u, p, jac=True, jac_p=False)
+            if np.max(np.abs(ev.R / prob.scale_u)) > 1e-9:  # not the stored discretization
                 u, ev, _, _ = prob.solve(u, p, max_iter=6)
                 xm0 = float(ev.xmax)
                 mu0 = prob.multipliers(ev.Ms) if (has_mu and ev.Ms) else None
-            xm1, mu1, u1 = refined_point(prob, u, p, mu0)
+            xm1, mu1, u1, J = refined_point(prob, u, p, mu0, jac=ev.Ju)
         except (ConvergenceError, ValueError, nlbeam.IntegrationError):
             continue
         xe[i] = SAFETY * abs(xm0 - xm1)
@@ -682,7 +685,7 @@ def branch_errors(model, branch, integrator, *, every=1, corners=(), target=1e-5
             if err <= target:
                 break
             try:
-                _, mu_k, u1 = refined_point(prob, u1, p, mu1, level=k)
+                _, mu_k, u1, J = refined_point(prob, u1, p, mu1, level=k, jac=J)
             except (ConvergenceError, ValueError, nlbeam.IntegrationError):
                 break
             d_k = _change(mu_k, mu1)
