@@ -48,9 +48,10 @@ class Branch(Summary):
     that warning too, with the interval it leaves uncovered.
     Accuracy (continuation.accuracy.branch_errors): xmax_error (n,) m and multipliers_error
     (n,) (the largest over each point's multipliers; None without stability) estimate the
-    integration's error, computed at the points where error_sampled (n,) is True (every 10th,
-    the ends) and elsewhere the larger estimate of the two nearest sampled points; None when
-    not estimated (accuracy='off')."""
+    integration's error, computed at the points where error_sampled (n,) is True (every point
+    whose orbit was found with both steps halved; there multipliers and stable are those of
+    that orbit) and elsewhere the larger estimate of the level-0 values' error at the two
+    nearest computed points; None when not estimated (accuracy='off')."""
 
     order: int
     parameter: str
@@ -1077,7 +1078,8 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
     halved, quartered, ... until its stated ``error`` (Hz) meets that many digits (its
     frequency becomes the finer, extrapolated value); grazing points are located once more
     with the step halved; every branch point gets error estimates of xmax and of the
-    multipliers (computed at every 10th point; continuation.accuracy.estimate_diagram). One
+    multipliers, and its multipliers and stability flag are those of the orbit carried to
+    the step halved (continuation.accuracy.branch_errors, estimate_diagram). One
     ContinuationWarning lists what misses the target (multipliers: 10^-(digits - 1)); the
     branch points stay those of the integrator (dt_scale, steps_per_contact) given.
     workers: local processes (None: the CPU count; default 1, this process only), scheduler:

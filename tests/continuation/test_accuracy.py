@@ -12,6 +12,7 @@ import scipy.optimize
 
 import continuation as C
 import nlbeam
+from continuation._newton import ConvergenceError
 from continuation.accuracy import combine, match_multipliers
 from continuation.refine import locate_extended
 from continuation.shooting import Integrator
@@ -288,3 +289,49 @@ def test_fold_by_the_slope_is_the_turning_point_of_p_alone():
     p_vertex = _vertex_along(prob, np.r_[u / w, p / wp], t, jp, 1e-4, 1e-10)[-1] * wp
     assert abs(p_slope - p_vertex) <= 1e-10 * p
     assert abs(p_slope - p) > 1e-8 * p  # the finer step moved it (6.6e-8 relative)
+
+
+@pytest.mark.parametrize("name, model, amplitude, f_range, f0", [
+    ("paper 10.4-12.4 Hz", PAPER, 1e-4, (10.4, 12.4), 11.0),
+    ("2-DOF hertz 14-16 Hz", TWO_DOF, 1e-4, (14.0, 16.0), 15.0),
+])
+def test_diagram_multipliers_meet_the_default_target(name, model, amplitude, f_range, f0):
+    """At the defaults the diagram reports each point's multipliers from its orbit carried to
+    the step halved, or quartered where that misses 1e-5 (accuracy.branch_errors): against
+    the converged values (FINE) they are within their stated error at every checked point,
+    the stated error is not vacuous, and 1e-5 (issue 13 item 5) is met at most points; the
+    level-0 multipliers of the same points miss it far more often (the contact steps' error:
+    1e-4 on the paper model at 12 Hz, 1.4e-5 on the 2-DOF system at 15 Hz). Measured on the
+    paper case: 8 of 100 points above 1e-5 (next to the fold at 12.17 Hz and the large
+    multipliers at 11.63 and 14.46 Hz), level 0: most."""
+    s0 = C.periodic_solution(model, amplitude, f0, error=False).state0
+    frc = C.frequency_response(model, amplitude, f_range, orders=(1,), brute_force_grid=False,
+                               starts=[(f0, 1, s0)])
+    true, stated, true0 = [], [], []
+    for b in frc.branches:
+        assert b.error_sampled.all()  # every point estimated, none interpolated
+        for i in range(0, len(b.values), 4):
+            f = float(b.frequency[i])
+            sol = C.periodic_solution(model, amplitude, f, guess=b.state0[i], error=False)
+            # FINE's variational multipliers (``converged`` checks them against central
+            # differences at four cases; at |mu| = 6.7 those differences' round-off exceeds
+            # its 2e-6)
+            try:  # (next to 14.46 Hz, |mu| ~ 100, FINE's Newton stagnates at 2e-10)
+                mu = C.periodic_solution(model, amplitude, f, guess=sol, integrator=FINE,
+                                         error=False).multipliers
+            except ConvergenceError:
+                continue
+            big = np.maximum(1.0, np.abs(mu))
+            true.append(np.max(np.abs(b.multipliers[i] - match_multipliers(b.multipliers[i], mu))
+                               / big))
+            stated.append(b.multipliers_error[i])
+            assert true[-1] <= stated[-1], (f, true[-1], stated[-1])
+            if abs(np.abs(mu).max() - 1.0) > stated[-1]:
+                assert bool(b.stable[i]) == bool(np.abs(mu).max() < 1.0), f
+            mu0 = sol.multipliers  # the level-0 values at this point
+            true0.append(np.max(np.abs(mu0 - match_multipliers(mu0, mu)) / big))
+    true, stated, true0 = map(np.array, (true, stated, true0))
+    assert true.size >= 10
+    assert np.median(true / stated) >= 0.01  # not a vacuous bound (measured 0.05-0.15)
+    assert np.mean(true <= 1e-5) >= 0.85
+    assert np.sum(true0 > 1e-5) >= 2 * max(np.sum(true > 1e-5), 1)
