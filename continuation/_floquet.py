@@ -22,6 +22,8 @@ import math
 
 import numpy as np
 
+
+from . import _linalg as la
 #: the formed product is used unless its largest multiplier exceeds this times its smallest
 SPREAD = 1e8
 #: the spread one factor of the product form may carry: the smallest multiplier then keeps
@@ -55,7 +57,7 @@ def product_eigenvalues(Ms):
         return np.zeros(0, dtype=complex)
     M = np.eye(n)
     for Mj in Ms:
-        M = Mj @ M
+        M = la.matmul(Mj, M)
     if n == 1:
         return np.array([np.prod([float(Mj[0, 0]) for Mj in Ms])], dtype=complex)
     B = _dominant_basis(M)
@@ -64,13 +66,13 @@ def product_eigenvalues(Ms):
     Q = Q0
     Rs = []
     for Mj in Ms:
-        Q, R = np.linalg.qr(Mj @ Q)
+        Q, R = np.linalg.qr(la.matmul(Mj, Q))
         Rs.append(R)
-    C = Q0.T @ Q
+    C = la.matmul(Q0.T, Q)
     lead = np.eye(k)
     for R in Rs:
-        lead = R[:k, :k] @ lead
-    mu_lead = np.linalg.eigvals(C[:k, :k] @ lead).astype(complex)
+        lead = la.matmul(R[:k, :k], lead)
+    mu_lead = np.linalg.eigvals(la.matmul(C[:k, :k], lead)).astype(complex)
     if n == k:
         return mu_lead
     rest = [R[k:, k:] for R in Rs] + [C[k:, k:]]
@@ -113,7 +115,7 @@ def multipliers(Ms, M=None, subdivide=None):
     if M is None:
         M = np.eye(Ms[0].shape[0])
         for Mj in Ms:
-            M = Mj @ M
+            M = la.matmul(Mj, M)
     mu = np.linalg.eigvals(M)
     spread = _spread(mu)
     if spread is None or not spread > SPREAD:

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import _linalg as la
 
 class ConvergenceError(RuntimeError):
     """A Newton iteration did not converge; the message says what to try."""
@@ -32,7 +33,7 @@ def newton(fun, z0, *, tol=1e-10, max_iter=12, what="Newton", residual=None):
         if not np.isfinite(res):
             break
         try:
-            dz = np.linalg.solve(J, -r)
+            dz = la.solve(J, -r)
         except np.linalg.LinAlgError:
             raise ConvergenceError(f"{what}: singular Jacobian at iteration {it}; {HINT}") from None
         z = z + dz
@@ -40,7 +41,7 @@ def newton(fun, z0, *, tol=1e-10, max_iter=12, what="Newton", residual=None):
             r, J = fun(z)
         else:
             r_old, r = r, residual(z)
-            J = J + np.outer(r - r_old - J @ dz, dz) / (dz @ dz)
+            J = J + np.outer(r - r_old - la.matmul(J, dz), dz) / la.dot(dz, dz)
         res_new = float(np.max(np.abs(r)))
         step = float(np.max(np.abs(dz)))
         if res_new <= tol or (step <= 1e-3 * tol and res_new <= 1e3 * tol):

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._newton import ConvergenceError
+from . import _linalg as la
 
 
 def tangent(J, t_prev):
@@ -29,8 +30,8 @@ def tangent(J, t_prev):
     A = np.vstack([J, t_prev[None, :]])
     b = np.zeros(A.shape[0])
     b[-1] = 1.0
-    t = np.linalg.solve(A, b)
-    return t / np.linalg.norm(t)
+    t = la.solve(A, b)
+    return t / la.norm(t)
 
 
 def fold_sign(pt, margin):
@@ -45,7 +46,7 @@ def fold_sign(pt, margin):
         return np.sign(tf), bool(tf != 0.0 and not np.any(np.abs(real - 1.0) < margin))
     if pt.jac is not None:
         n = pt.jac.shape[0]
-        s, _ = np.linalg.slogdet(pt.jac[:, :n])
+        s = la.det_sign(pt.jac[:, :n])
         return float(s), bool(s != 0.0)
     return 0.0, False
 
@@ -73,18 +74,18 @@ class Crossing:
 
 def _oriented(pt, ref):
     if pt.jac is None:
-        return ref / np.linalg.norm(ref)
+        return ref / la.norm(ref)
     try:
         return tangent(pt.jac, ref)
     except np.linalg.LinAlgError:
-        return ref / np.linalg.norm(ref)
+        return ref / la.norm(ref)
 
 
 def _behind(dz, t, cos_max=-0.5):
     """Does the step dz (scaled) from a branch point run back against its direction of travel
     t (unit), at an angle whose cosine is below cos_max?"""
-    n = float(np.linalg.norm(dz))
-    return n > 0.0 and float(dz @ t) < cos_max * n
+    n = la.norm(dz)
+    return n > 0.0 and la.dot(dz, t) < cos_max * n
 
 
 def check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict):
@@ -104,7 +105,7 @@ def check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict):
     judged after three bisections; only an accepted b is bracketed on (``tr.grazing_iter``
     bisections in all). Returns a Crossing, or None."""
     lo, z_lo, hi, z_hi = a, z_a, b, z_b
-    L0 = float(np.linalg.norm(z_b - z_a))
+    L0 = la.norm(z_b - z_a)
     e_p = np.zeros(len(z_a))
     e_p[-1] = 1.0
     t_near = _oriented(a, t_a)
@@ -116,10 +117,10 @@ def check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict):
         stop = done >= tr.grazing_iter
         if not stop:
             d = z_hi - z_lo
-            L = float(np.linalg.norm(d))
+            L = la.norm(d)
             # (the chord's length, not the bracket's width in p: where the branch turns back at
             # the corner the two sides lie at nearly one p, yet far apart)
-            stop = L <= 10 * tr.bif_tol * max(1.0, float(np.linalg.norm(z_a)))
+            stop = L <= 10 * tr.bif_tol * max(1.0, la.norm(z_a))
         if not stop:
             m = z_lo + 0.5 * d
             try:
@@ -131,7 +132,7 @@ def check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict):
                 try:
                     zs, evs, _ = tr.correct(prob, m, e_p, a.corr, fixed_p=True)
                     tr.complete_jacobian(prob, evs)
-                    stop = bool(np.linalg.norm(zs - m) > 0.5 * L)
+                    stop = bool(la.norm(zs - m) > 0.5 * L)
                 except ConvergenceError:
                     stop = True
         if not stop:
@@ -151,7 +152,7 @@ def check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict):
         # judged once, after three bisections (or fewer, if they stopped): a rejected b costs
         # no further bisections; an accepted one is bracketed on to grazing_iter
         judged = True
-        gap = float(np.linalg.norm(z_hi - z_lo))
+        gap = la.norm(z_hi - z_lo)
         connected = (gap <= 0.3 * L0) if done >= 2 else (True if gap <= 1e-9 else None)
         if connected is False or (strict and not connected):
             return None
@@ -169,7 +170,7 @@ def check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict):
             # forth, which only two folds could explain: not this branch
         if stop:
             break
-    gap = float(np.linalg.norm(z_hi - z_lo))
+    gap = la.norm(z_hi - z_lo)
     return Crossing(lo, hi, z_lo, z_hi, abs(hi.p - lo.p), gap, t_far, turn, connected)
 
 
@@ -349,7 +350,7 @@ def joined(tr, prob, a, z_a, z_b):
     land near the chord (within a quarter of its length) with the same number of impacts; on
     two different orbits close by it lands on one of them, half a chord away, or fails."""
     d = z_b - z_a
-    L = float(np.linalg.norm(d))
+    L = la.norm(d)
     if L == 0.0:
         return True
     m = z_a + 0.5 * d
@@ -357,7 +358,7 @@ def joined(tr, prob, a, z_a, z_b):
         zs, evs, _ = tr.correct(prob, m, d / L, a.corr)
     except ConvergenceError:
         return False
-    return evs.n_impacts == a.n_impacts and float(np.linalg.norm(zs - m)) <= 0.25 * L
+    return evs.n_impacts == a.n_impacts and la.norm(zs - m) <= 0.25 * L
 
 
 class Retrace:
@@ -425,13 +426,13 @@ class Retrace:
     def _hits(self, A, B, nA, nB, x, dn, n_new, fold=None):
         """(back, fwd): segments A -> B that the new point x (step dn) runs back or forward
         along. fold: per segment, whether a fold may lie on it (None: everywhere)."""
-        Ln = float(np.linalg.norm(dn))
+        Ln = la.norm(dn)
         d = B - A
-        L = np.linalg.norm(d, axis=1)
+        L = la.norm(d)
         safe = np.where(L > 0, L, 1.0)
         lam = np.einsum("ij,ij->i", x - A, d) / safe ** 2
-        dist = np.linalg.norm(A + np.clip(lam, 0, 1)[:, None] * d - x, axis=1)
-        cos = (d @ dn) / (safe * Ln)
+        dist = la.norm(A + np.clip(lam, 0, 1)[:, None] * d - x)
+        cos = la.matmul(d, dn) / (safe * Ln)
         near = ((L > 0) & (lam >= 0) & (lam <= 1) & (dist <= self.tol * np.maximum(L, Ln))
                 & (nA == n_new) & (nB == n_new))
         if fold is not None:  # the parameter within the segment's range, unless a fold may
@@ -446,7 +447,7 @@ class Retrace:
     def _smooth(self, S, dz):
         """Segments of the signature rows S whose signature moved at most ``jump`` times
         their length in z (dz: of the step to each row)."""
-        L = np.linalg.norm(np.diff(S, axis=0), axis=1)
+        L = la.norm(np.diff(S, axis=0))
         return (dz[1:] > 0) & (L <= self.jump * dz[1:])
 
     def check(self):
@@ -464,7 +465,7 @@ class Retrace:
         fold = (fs[:-1] != fs[1:]) | (fs[:-1] == 0)  # per segment i (rows i, i + 1)
         prob, z = self.zs[-1]
         dn_s = X[-1] - X[-2]
-        sig_ok = bool(dz[-1] > 0 and 0 < np.linalg.norm(dn_s) <= self.jump * dz[-1])
+        sig_ok = bool(dz[-1] > 0 and 0 < la.norm(dn_s) <= self.jump * dz[-1])
         back = np.zeros(k - 1, dtype=bool)
         fwd = np.zeros(k - 1, dtype=bool)
         handled = np.zeros(k - 1, dtype=bool)
@@ -477,7 +478,7 @@ class Retrace:
             Z = np.array([zz for _, zz in self.zs[s0:]])
             idx = np.arange(s0, k - 1)
             dn_z = Z[-1] - Z[-2]
-            if np.linalg.norm(dn_z) > 0:
+            if la.norm(dn_z) > 0:
                 back[idx], fwd[idx] = self._hits(Z[:-2], Z[1:-1], n[idx], n[idx + 1], z, dn_z,
                                                  n[-1], fold[idx])
             handled[idx] = True

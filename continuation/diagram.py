@@ -16,6 +16,7 @@ from nlbeam.solver import period_step
 from nlbeam.summary import Summary, describe_value
 
 from . import _arguments as _args
+from . import _linalg as la
 from ._newton import ContinuationWarning, ConvergenceError
 from .parallel import Speculator, take, taken
 from .pathfollow import Tracer
@@ -428,7 +429,7 @@ def _switch(tracer, pt, order):
     v = V[:, i].real
     vs = [v]
     for Mj in ev.Ms[:-1]:
-        vs.append(Mj @ vs[-1])
+        vs.append(la.matmul(Mj, vs[-1]))
     b2 = np.r_[prob.boundaries, prob.boundaries + prob.order]
     P2 = ShootingProblem(prob.base_model, prob.amplitude, prob.frequency, 2 * prob.order, b2,
                          prob.integrator, parameter=prob.parameter,
@@ -439,7 +440,7 @@ def _switch(tracer, pt, order):
     P2.scale_u = np.r_[prob.scale_u, prob.scale_u]
     d = np.r_[np.concatenate(vs), -np.concatenate(vs)] / P2.scale_u
     t0 = np.r_[d, 0.0]
-    t0 /= np.linalg.norm(t0)
+    t0 /= la.norm(t0)
     return P2, u2, pt.p, t0
 
 
@@ -488,7 +489,7 @@ def _trace_switched(tracer, pt, order, branches=(), pd_values=(), overlap=None):
         if len(hist) < 4:
             return False
         (pa, Da, ra), (pb, Db, rb), (pc, Dc, rc), (pd, Dd, rd) = hist[-4:]
-        return bool(ra is rb is rc is rd and Db @ Dc < 0
+        return bool(ra is rb is rc is rd and la.dot(Db, Dc) < 0
                     and min(float(np.max(np.abs(Db))), float(np.max(np.abs(Dc)))) < 0.3 * d0[1]
                     and (pb - pa) * (pd - pc) < 0
                     and any(abs(pc - v) < 5e-3 * abs(v) for v in pd_values))
@@ -508,7 +509,7 @@ def _trace_switched(tracer, pt, order, branches=(), pd_values=(), overlap=None):
     u1, p1 = z1[:-1] * w, z1[-1] * wp
     # orient along the direction away from the PD point
     pts, loc, reason = tracer.trace(P2, u1, p1, stop=_either(stop, overlap),
-                                    t0=(z1 - z0) / np.linalg.norm(z1 - z0))
+                                    t0=(z1 - z0) / la.norm(z1 - z0))
     if _halves_distance(pts[0]) < 1e-6:
         return None
     return pts, loc, ("period-doubling", reason)

@@ -10,6 +10,8 @@ from typing import Protocol
 
 import numpy as np
 
+
+from . import _linalg as la
 from ._newton import ContinuationWarning, ConvergenceError
 from .corners import (JUMP_HS, Retrace, check_crossing, far_side, map_jump,
                       smooth_fold_beside, tangent)
@@ -317,7 +319,7 @@ class Tracer:
             elif dz_norm > 1e-6:
                 # Broyden's update (not from steps so short that the map's noise, ~1e-8 where
                 # contacts nearly stick, would dominate the difference)
-                C = C + np.outer(r - r_prev - (base + C) @ dz, dz) / (dz @ dz)
+                C = C + np.outer(r - r_prev - la.matmul(base + C, dz), dz) / la.dot(dz, dz)
             B = base + C
             ev.B, ev.C, ev.lazy_p = B, C, lazy_p
             if res < self.tol or (res < 100 * self.tol and dz_norm < 1e-9):
@@ -337,7 +339,7 @@ class Tracer:
             r_prev = r
             A = np.vstack([B, t[None, :]])
             try:
-                dz = np.linalg.solve(A, -np.r_[r, t @ (z - zeta_pred)])
+                dz = la.solve(A, -np.r_[r, la.dot(t, z - zeta_pred)])
             except np.linalg.LinAlgError:
                 break
             dz_norm = float(np.max(np.abs(dz)))
@@ -400,7 +402,7 @@ class Tracer:
             z_prev = np.r_[prob2.transfer(pts[-2].problem, pts[-2].u, pts[-2].p) / w,
                            pts[-2].p / wp]
             sec = z - z_prev
-            t = sec / np.linalg.norm(sec)
+            t = sec / la.norm(sec)
         else:
             t = np.zeros(len(z))
             t[-1] = float(direction)
@@ -413,7 +415,7 @@ class Tracer:
         t_first = t
         if len(pts) > 1:
             z1 = np.r_[prob2.transfer(pts[1].problem, pts[1].u, pts[1].p) / w, pts[1].p / wp]
-            t_first = (z1 - z_first) / np.linalg.norm(z1 - z_first)
+            t_first = (z1 - z_first) / la.norm(z1 - z_first)
         return z, t, z_first, t_first
 
     def _more_segments(self, prob, pt):
@@ -600,8 +602,8 @@ class Tracer:
                     seen = set(self.impacts_seen)
                     iterates = list(self.iterates)
                     ptn = self._point(prob, zn, evn, t)
-                    tn = (zn - z) / np.linalg.norm(zn - z)  # secant: the next predictor
-                    angle = float(np.arccos(np.clip(t @ tn, -1, 1)))
+                    tn = (zn - z) / la.norm(zn - z)  # secant: the next predictor
+                    angle = float(np.arccos(np.clip(la.dot(t, tn), -1, 1)))
                     ok = angle <= self.max_angle
                     if ptn.n_impacts != pts[-1].n_impacts:
                         guesses.append(zn)
@@ -814,7 +816,7 @@ class Tracer:
                 tfs.append(tf)
                 reason = "stop"
                 break
-            steps.append(float(np.linalg.norm(zn - z)))
+            steps.append(la.norm(zn - z))
             pts.append(pt)
             tfs.append(tf)
             n_at_point = self.n_evaluations
@@ -979,7 +981,7 @@ class Tracer:
         w, wp = prob.scale_u, prob.scale_p
         za = np.r_[pa.u / w, pa.p / wp]
         d = np.r_[pb.u / w, pb.p / wp] - za
-        L = float(np.linalg.norm(d))
+        L = la.norm(d)
         if L == 0.0:
             return None
         return self.locate(prob, za, d / L, L, k, g_a, g_b, pa.corr, p_a=pa.p,
@@ -1121,11 +1123,11 @@ def _passes(z_first, t_first, prev, z, prob):
         return False
     za = np.r_[prev.u / prob.scale_u, prev.p / prob.scale_p]
     d = z - za
-    L = float(np.linalg.norm(d))
-    if L == 0.0 or d @ t_first < 0.8 * L:
+    L = la.norm(d)
+    if L == 0.0 or la.dot(d, t_first) < 0.8 * L:
         return False
-    lam = float(np.clip((z_first - za) @ d / (L * L), 0.0, 1.0))
-    return float(np.linalg.norm(za + lam * d - z_first)) < 0.1 * L + 1e-9
+    lam = float(np.clip(la.dot(z_first - za, d) / (L * L), 0.0, 1.0))
+    return la.norm(za + lam * d - z_first) < 0.1 * L + 1e-9
 
 
 def _critical(mu, kind):
@@ -1182,7 +1184,7 @@ def _firsts(prob, pts):
     if len(pts) < 2:
         return z0, pts[0].tangent
     d = zz(pts[1]) - z0
-    return z0, d / np.linalg.norm(d)
+    return z0, d / la.norm(d)
 
 
 def _has_pair_near_circle(mu_a, mu_b):

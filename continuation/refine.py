@@ -20,6 +20,8 @@ import numpy as np
 
 from nlbeam.summary import Summary
 
+
+from . import _linalg as la
 from ._newton import ConvergenceError
 from .shooting import Integrator, _problem_from_state
 
@@ -59,7 +61,7 @@ class Refined(Summary):
 
 def _test_function(kind, M):
     s = -1.0 if kind == "fold" else 1.0
-    return float(np.linalg.det(M + s * np.eye(len(M))))
+    return la.det(M + s * np.eye(len(M)))
 
 
 def locate_extended(model, amplitude, frequency, order, state0, kind, integrator, *,
@@ -108,7 +110,7 @@ def locate_extended(model, amplitude, frequency, order, state0, kind, integrator
             break
         res = float(np.max(np.abs(G)))
         try:
-            dz = np.linalg.solve(J, -G)
+            dz = la.solve(J, -G)
         except np.linalg.LinAlgError:
             break
         solve_error = abs(dz[-1]) * wp  # the Newton step still to go: the solve's error in p

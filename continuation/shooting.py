@@ -30,6 +30,7 @@ from nlbeam.vocabulary import METHODS as METHOD_NAMES
 
 from . import _flowcache
 from ._newton import ConvergenceError, ContinuationWarning, newton
+from . import _linalg as la
 from .pathfollow import Problem
 
 
@@ -132,7 +133,7 @@ def clearance(model, states, y):
         return np.full(states.shape[0], np.inf)
     _, w, wy, gap = model.element_geometry()  # delta = w.x + wy y - gap
     N = model.n_dof
-    d = states[:, :N] @ w[idx].T + np.outer(np.atleast_1d(y), wy[idx]) - gap[idx]
+    d = la.matmul(states[:, :N], w[idx].T) + np.outer(np.atleast_1d(y), wy[idx]) - gap[idx]
     return -np.max(d, axis=1)
 
 
@@ -284,7 +285,7 @@ class ShootingProblem(Problem):
                 if fl.dstate_dvminus0 is not None:
                     # started inside a contact: the memory was taken as the penetration rate
                     # at the start (the solver's rule), a function of the state: chain it in
-                    M = M + fl.dstate_dvminus0 @ Solver.start_contact_derivative(model)
+                    M = M + la.matmul(fl.dstate_dvminus0, Solver.start_contact_derivative(model))
                 Ms.append(M)
             elif mono:
                 # forward differences of the segment's flow (relative step 1e-7 of the scale)
@@ -333,7 +334,7 @@ class ShootingProblem(Problem):
                     continue  # ends inside a contact: flow from a to the next cut instead
                 M = fl.monodromy
                 if fl.dstate_dvminus0 is not None:  # only a segment's start: see _map
-                    M = M + fl.dstate_dvminus0 @ G
+                    M = M + la.matmul(fl.dstate_dvminus0, G)
                 out.append(M)
                 s, disc, a = fl.state, fl.disc, b
         return out
@@ -388,7 +389,7 @@ class ShootingProblem(Problem):
     def monodromy(self, Ms):
         M = np.eye(self.N2)
         for Mj in Ms:
-            M = Mj @ M
+            M = la.matmul(Mj, M)
         return M
 
     def multipliers(self, Ms):
@@ -658,8 +659,9 @@ def decay_rate(model):
     """Slowest decay rate (1/s) of the linear structure (without the nonlinear elements)."""
     sysm = model.system
     N = model.n_dof
-    Minv = np.linalg.inv(sysm.M)
-    A = np.block([[np.zeros((N, N)), np.eye(N)], [-Minv @ sysm.K, -Minv @ sysm.C]])
+    Minv = la.inv(sysm.M)
+    A = np.block([[np.zeros((N, N)), np.eye(N)],
+                  [-la.matmul(Minv, sysm.K), -la.matmul(Minv, sysm.C)]])
     lam = np.linalg.eigvals(A)
     return max(float(np.min(-lam.real)), 1e-6)
 

@@ -1,0 +1,113 @@
+"""continuation._linalg: small dense linear algebra in a fixed order of operations, so that a
+diagram does not depend on which BLAS/LAPACK kernels OpenBLAS picks for the CPU
+(OPENBLAS_CORETYPE). Exact answers, agreement with numpy within round-off, and the same
+results, bit for bit, under two OpenBLAS core types (in subprocesses)."""
+import os
+import platform
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from continuation import _linalg as la
+
+
+def test_exact_answers():
+    A = np.array([[0.0, 2.0, 1.0], [1.0, 1.0, 0.0], [4.0, 0.0, 2.0]])  # needs pivoting
+    x = np.array([1.0, -2.0, 3.0])
+    assert np.array_equal(la.solve(A, A @ x), x)
+    assert la.det(A) == -6.0 and la.det_sign(A) == -1.0
+    assert la.det_sign(-A) == 1.0
+    assert np.array_equal(la.solve(A, np.column_stack([A @ x, 2 * A @ x])),
+                          np.column_stack([x, 2 * x]))
+    assert np.array_equal(la.matmul(A, la.inv(A) * 6.0).round(12), 6.0 * np.eye(3))
+    assert la.norm(np.array([3e200, 4e200])) == 5e200  # no overflow of the squares
+    assert la.norm(np.array([3e-200, -4e-200])) == 5e-200
+    assert np.array_equal(la.norm(np.array([[3.0, 4.0], [0.0, -2.0]])), [5.0, 2.0])
+    assert la.dot(np.array([1.0, 2.0]), np.array([3.0, -4.0])) == -5.0
+    with pytest.raises(np.linalg.LinAlgError):
+        la.solve(np.array([[1.0, 2.0], [2.0, 4.0]]), np.ones(2))
+    assert la.det_sign(np.array([[1.0, 2.0], [2.0, 4.0]])) == 0.0
+
+
+def test_agrees_with_numpy_within_roundoff():
+    rng = np.random.default_rng(7)
+    for n in (1, 2, 3, 7, 21):
+        A = rng.normal(size=(n, n)) + n * np.eye(n)
+        B = rng.normal(size=(n, 4))
+        b = B[:, 0]
+        assert np.allclose(la.solve(A, b), np.linalg.solve(A, b), rtol=1e-12, atol=1e-14)
+        assert np.allclose(la.solve(A, B), np.linalg.solve(A, B), rtol=1e-12, atol=1e-14)
+        assert np.isclose(la.det(A), np.linalg.det(A), rtol=1e-12)
+        assert np.allclose(la.matmul(A, B), A @ B, rtol=1e-13, atol=1e-13)
+        assert np.allclose(la.matmul(A, b), A @ b, rtol=1e-13, atol=1e-13)
+        assert np.allclose(la.matmul(b, A), b @ A, rtol=1e-13, atol=1e-13)
+        assert np.isclose(la.norm(b), np.linalg.norm(b), rtol=1e-14)
+        assert np.allclose(la.norm(B.T), np.linalg.norm(B.T, axis=1), rtol=1e-14)
+
+
+def _has_avx2():
+    if platform.machine().lower() not in ("x86_64", "amd64"):
+        return False
+    try:
+        with open("/proc/cpuinfo") as f:
+            return " avx2" in f.read()
+    except OSError:
+        return False
+
+
+def _run(coretype, code):
+    env = dict(os.environ, OPENBLAS_CORETYPE=coretype)
+    out = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], env=env,
+                         capture_output=True, text=True, timeout=1800)
+    assert out.returncode == 0, out.stderr[-2000:]
+    return out.stdout.strip().splitlines()[-1]
+
+
+_ROUTINES = """
+    import numpy as np
+    from continuation import _linalg as la
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(9, 9)); B = rng.normal(size=(9, 9)); b = rng.normal(size=9)
+    out = np.r_[la.solve(A, b), la.matmul(A, B).ravel(), la.norm(b), la.dot(b, A[0]), la.det(A)]
+    print(out.tobytes().hex())
+"""
+
+_SCENE = """
+    import hashlib, warnings
+    import numpy as np
+    import continuation as C, nlbeam
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        frc = C.frequency_response(nlbeam.BeamImpact.paper(), 1e-4, (12.3, 14.2),
+                                   orders=(1, 2), n_grid=4)
+    h = hashlib.sha256()
+    for b in frc.branches:
+        h.update(np.ascontiguousarray(b.frequency).tobytes())
+        h.update(np.ascontiguousarray(b.values).tobytes())
+    for b in frc.bifurcations:
+        h.update(np.float64(b.frequency).tobytes())
+    print(len(frc.branches), sum(len(b.frequency) for b in frc.branches),
+          len(frc.bifurcations), h.hexdigest())
+"""
+
+needs_avx2 = pytest.mark.skipif(not _has_avx2(), reason="the OpenBLAS core types compared "
+                                "(Prescott: SSE3, Haswell: AVX2 + FMA) need an x86-64 CPU with "
+                                "AVX2")
+
+
+@needs_avx2
+def test_routines_are_the_same_under_two_openblas_core_types():
+    assert _run("Prescott", _ROUTINES) == _run("Haswell", _ROUTINES)
+
+
+@pytest.mark.slow
+@needs_avx2
+def test_diagram_is_the_same_under_two_openblas_core_types():
+    """The switched-branch scene (paper model, 12.3-14.2 Hz, orders 1-2) gives the same
+    branches and bifurcations, bit for bit, with OpenBLAS's SSE3 kernels as with its
+    AVX2/FMA ones (before continuation._linalg it did not: see the commit)."""
+    a, b = _run("Prescott", _SCENE), _run("Haswell", _SCENE)
+    assert a == b
