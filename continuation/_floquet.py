@@ -39,14 +39,14 @@ ROUNDS = 4
 def _dominant_basis(M):
     """Orthonormal (n, k) basis of the invariant subspace of M's largest multiplier (k = 1) or
     complex pair (k = 2)."""
-    lam, V = np.linalg.eig(M)
+    lam, V = la.eig(M)
     i = int(np.argmax(np.abs(lam)))
     v = V[:, i]
     if abs(lam[i].imag) > 0:
         B = np.column_stack([v.real, v.imag])
     else:
         B = v.real[:, None]
-    return np.linalg.qr(B)[0]
+    return la.qr(B)[0]
 
 
 def product_eigenvalues(Ms):
@@ -62,17 +62,17 @@ def product_eigenvalues(Ms):
         return np.array([np.prod([float(Mj[0, 0]) for Mj in Ms])], dtype=complex)
     B = _dominant_basis(M)
     k = B.shape[1]
-    Q0 = np.linalg.qr(np.column_stack([B, np.eye(n)]))[0][:, :n]
+    Q0 = la.qr(np.column_stack([B, np.eye(n)]))[0][:, :n]
     Q = Q0
     Rs = []
     for Mj in Ms:
-        Q, R = np.linalg.qr(la.matmul(Mj, Q))
+        Q, R = la.qr(la.matmul(Mj, Q))
         Rs.append(R)
     C = la.matmul(Q0.T, Q)
     lead = np.eye(k)
     for R in Rs:
         lead = la.matmul(R[:k, :k], lead)
-    mu_lead = np.linalg.eigvals(la.matmul(C[:k, :k], lead)).astype(complex)
+    mu_lead = la.eigvals(la.matmul(C[:k, :k], lead)).astype(complex)
     if n == k:
         return mu_lead
     rest = [R[k:, k:] for R in Rs] + [C[k:, k:]]
@@ -116,7 +116,7 @@ def multipliers(Ms, M=None, subdivide=None):
         M = np.eye(Ms[0].shape[0])
         for Mj in Ms:
             M = la.matmul(Mj, M)
-    mu = np.linalg.eigvals(M)
+    mu = la.eigvals(M)
     spread = _spread(mu)
     if spread is None or not spread > SPREAD:
         return mu[np.argsort(-np.abs(mu), kind="stable")]

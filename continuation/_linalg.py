@@ -198,3 +198,341 @@ def norm(a):
     if a.ndim == 2:
         return _norm_rows(a)
     return float(_norm(a.ravel()))
+
+
+
+# --- eigenvalues: balancing, Hessenberg reduction, Francis double-shift QR ----------------
+@njit(cache=True)
+def _balance(A):
+    """(D^-1 A D, diag D) with D diagonal of powers of 2 (exact; the eigenvalues are
+    unchanged) such that each row and column of the off-diagonal part have comparable
+    1-norms."""
+    n = A.shape[0]
+    B = A.copy()
+    dg = np.ones(n)
+    done = False
+    while not done:
+        done = True
+        for i in range(n):
+            c = 0.0
+            r = 0.0
+            for j in range(n):
+                if j != i:
+                    c += abs(B[j, i])
+                    r += abs(B[i, j])
+            if c == 0.0 or r == 0.0 or not (math.isfinite(c) and math.isfinite(r)):
+                continue
+            f = 1.0
+            while c * f < 0.5 * r / f and f < 1e150:
+                f *= 2.0
+            while c * f > 2.0 * r / f and f > 1e-150:
+                f *= 0.5
+            if f != 1.0 and c * f + r / f < 0.95 * (c + r):
+                done = False
+                dg[i] *= f
+                for j in range(n):
+                    B[j, i] *= f
+                    B[i, j] /= f
+    return B, dg
+
+
+@njit(cache=True)
+def _hessenberg(A):
+    """Upper Hessenberg matrix similar to A (Householder reflections)."""
+    n = A.shape[0]
+    H = A.copy()
+    v = np.zeros(n)
+    for k in range(n - 2):
+        s = 0.0
+        for i in range(k + 1, n):
+            s += H[i, k] * H[i, k]
+        if s == 0.0:
+            continue
+        x0 = H[k + 1, k]
+        alpha = -math.copysign(math.sqrt(s), x0)
+        for i in range(k + 1, n):
+            v[i] = H[i, k]
+        v[k + 1] = x0 - alpha
+        vv = s - x0 * x0 + v[k + 1] * v[k + 1]
+        if vv == 0.0:
+            continue
+        beta = 2.0 / vv
+        for j in range(n):  # from the left: rows k+1..n-1
+            w = 0.0
+            for i in range(k + 1, n):
+                w += v[i] * H[i, j]
+            w *= beta
+            for i in range(k + 1, n):
+                H[i, j] -= w * v[i]
+        for i in range(n):  # from the right: columns k+1..n-1
+            w = 0.0
+            for j in range(k + 1, n):
+                w += H[i, j] * v[j]
+            w *= beta
+            for j in range(k + 1, n):
+                H[i, j] -= w * v[j]
+        for i in range(k + 2, n):
+            H[i, k] = 0.0
+    return H
+
+
+@njit(cache=True)
+def _reflect(H, k, m, x, y, z, lo, hi):
+    """Apply the reflection that maps (x, y[, z]) (m = 3 or 2 components) onto a multiple of
+    e_1 to rows k..k+m-1 from the left and the same columns from the right, within the
+    active block lo..hi."""
+    s = x * x + y * y + (z * z if m == 3 else 0.0)
+    if s == 0.0:
+        return
+    alpha = -math.copysign(math.sqrt(s), x)
+    v0 = x - alpha
+    v1 = y
+    v2 = z if m == 3 else 0.0
+    beta = 2.0 / (v0 * v0 + v1 * v1 + v2 * v2)
+    for j in range(max(lo, k - 1), hi + 1):
+        w = v0 * H[k, j] + v1 * H[k + 1, j]
+        if m == 3:
+            w += v2 * H[k + 2, j]
+        w *= beta
+        H[k, j] -= w * v0
+        H[k + 1, j] -= w * v1
+        if m == 3:
+            H[k + 2, j] -= w * v2
+    for i in range(lo, min(k + 3, hi) + 1):
+        w = H[i, k] * v0 + H[i, k + 1] * v1
+        if m == 3:
+            w += H[i, k + 2] * v2
+        w *= beta
+        H[i, k] -= w * v0
+        H[i, k + 1] -= w * v1
+        if m == 3:
+            H[i, k + 2] -= w * v2
+
+
+@njit(cache=True)
+def _eigvals(A):
+    """(eigenvalues (complex, n), ok): balanced, reduced to Hessenberg form, then Francis
+    double-shift QR steps with deflation at negligible subdiagonals; complex pairs come as
+    (a + ib, a - ib), b > 0. ok False when 30 n steps did not deflate everything."""
+    n = A.shape[0]
+    ev = np.zeros(n, dtype=np.complex128)
+    H = _hessenberg(_balance(A)[0])
+    eps = 2.220446049250313e-16
+    p = n - 1
+    its = 0
+    while p >= 0:
+        lo = p
+        while lo > 0:
+            s = abs(H[lo - 1, lo - 1]) + abs(H[lo, lo])
+            if abs(H[lo, lo - 1]) <= eps * s or abs(H[lo, lo - 1]) < 1e-300:
+                H[lo, lo - 1] = 0.0
+                break
+            lo -= 1
+        if lo == p:
+            ev[p] = H[p, p]
+            p -= 1
+            its = 0
+            continue
+        if lo == p - 1:
+            a, b, c, d = H[p - 1, p - 1], H[p - 1, p], H[p, p - 1], H[p, p]
+            half = 0.5 * (a - d)
+            disc = half * half + b * c
+            if disc >= 0.0:
+                r = half + math.copysign(math.sqrt(disc), half)
+                e1 = d + r
+                e2 = d - b * c / r if r != 0.0 else d + half
+                ev[p - 1] = e1
+                ev[p] = e2
+            else:
+                im = math.sqrt(-disc)
+                ev[p - 1] = complex(d + half, im)
+                ev[p] = complex(d + half, -im)
+            p -= 2
+            its = 0
+            continue
+        its += 1
+        if its > 30 * n:
+            return ev, False
+        if its % 11 == 0:  # exceptional shift (breaks a cycle)
+            w = abs(H[p, p - 1]) + abs(H[p - 1, p - 2])
+            sh = H[p, p] + 1.5 * w
+            tr = 2.0 * sh
+            dt = sh * sh
+        else:
+            tr = H[p - 1, p - 1] + H[p, p]
+            dt = H[p - 1, p - 1] * H[p, p] - H[p - 1, p] * H[p, p - 1]
+        x = H[lo, lo] * H[lo, lo] + H[lo, lo + 1] * H[lo + 1, lo] - tr * H[lo, lo] + dt
+        y = H[lo + 1, lo] * (H[lo, lo] + H[lo + 1, lo + 1] - tr)
+        z = H[lo + 1, lo] * H[lo + 2, lo + 1]
+        for k in range(lo, p - 1):
+            _reflect(H, k, 3, x, y, z, lo, p)
+            x = H[k + 1, k]
+            y = H[k + 2, k]
+            if k < p - 2:
+                z = H[k + 3, k]
+        _reflect(H, p - 1, 2, x, y, 0.0, lo, p)
+    return ev, True
+
+
+@njit(cache=True)
+def _null_vector(A, lam):
+    """Unit vector x with (A - lam I) x ~ 0 (inverse iteration, two steps, from ones; pivots
+    below eps |A| raised to it), its largest-modulus component real and positive."""
+    n = A.shape[0]
+    M = A.astype(np.complex128)
+    scale = 0.0
+    for i in range(n):
+        for j in range(n):
+            scale = max(scale, abs(M[i, j]))
+        M[i, i] -= lam
+    tiny = 2.220446049250313e-16 * max(scale, 1e-300)
+    piv = np.arange(n)
+    for k in range(n):
+        p = k
+        big = abs(M[k, k])
+        for i in range(k + 1, n):
+            if abs(M[i, k]) > big:
+                big = abs(M[i, k])
+                p = i
+        if p != k:
+            for j in range(n):
+                M[k, j], M[p, j] = M[p, j], M[k, j]
+            piv[k], piv[p] = piv[p], piv[k]
+        if abs(M[k, k]) < tiny:
+            M[k, k] = tiny
+        for i in range(k + 1, n):
+            f = M[i, k] / M[k, k]
+            M[i, k] = f
+            for j in range(k + 1, n):
+                M[i, j] -= f * M[k, j]
+    x = np.ones(n, dtype=np.complex128)
+    for _ in range(2):
+        b = np.empty(n, dtype=np.complex128)
+        for i in range(n):
+            b[i] = x[piv[i]]
+        for i in range(n):  # L (unit lower)
+            for q in range(i):
+                b[i] -= M[i, q] * b[q]
+        for i in range(n - 1, -1, -1):  # U
+            for q in range(i + 1, n):
+                b[i] -= M[i, q] * b[q]
+            b[i] /= M[i, i]
+        big = 0.0
+        ib = 0
+        for i in range(n):
+            if abs(b[i]) > big:
+                big = abs(b[i])
+                ib = i
+        ph = b[ib] / abs(b[ib])
+        s = 0.0
+        for i in range(n):
+            b[i] = b[i] / ph / big
+            s += b[i].real * b[i].real + b[i].imag * b[i].imag
+        s = math.sqrt(s)
+        for i in range(n):
+            x[i] = b[i] / s
+    return x
+
+
+@njit(cache=True)
+def _unit_columns(V, dg):
+    """The columns of diag(dg) V scaled to unit 2-norm, each largest-modulus component real
+    and positive."""
+    n, m = V.shape
+    W = V.copy()
+    for j in range(m):
+        s = 0.0
+        big = 0.0
+        ib = 0
+        for i in range(n):
+            W[i, j] = V[i, j] * dg[i]
+            if abs(W[i, j]) > big:
+                big = abs(W[i, j])
+                ib = i
+        ph = W[ib, j] / big
+        for i in range(n):
+            W[i, j] = W[i, j] / ph / big
+            s += W[i, j].real * W[i, j].real + W[i, j].imag * W[i, j].imag
+        s = math.sqrt(s)
+        for i in range(n):
+            W[i, j] = W[i, j] / s
+    return W
+
+
+def eigvals(A):
+    """Eigenvalues (complex) of a real square matrix, in a fixed order of operations; complex
+    pairs as (a + ib, a - ib) with b > 0. Raises numpy.linalg.LinAlgError when the QR
+    iteration does not converge."""
+    A = _f(A)
+    if A.ndim != 2 or A.shape[0] != A.shape[1]:
+        raise ValueError(f"eigvals: A must be square (n, n); got {A.shape}")
+    if not np.all(np.isfinite(A)):
+        raise np.linalg.LinAlgError("Array must not contain infs or NaNs")
+    ev, ok = _eigvals(A)
+    if not ok:
+        raise np.linalg.LinAlgError("Eigenvalues did not converge")
+    return ev
+
+
+def eig(A):
+    """(eigenvalues, eigenvectors as columns) of a real square matrix, as ``eigvals`` and by
+    inverse iteration on the balanced matrix: unit 2-norm, largest-modulus component real and
+    positive."""
+    A = _f(A)
+    lam = eigvals(A)
+    B, dg = _balance(A)
+    V = np.column_stack([_null_vector(B, complex(m)) for m in lam])
+    return lam, _unit_columns(V, dg)
+
+
+@njit(cache=True)
+def _qr(A):
+    """Householder QR of A (n, m): (Q (n, k), R (k, m)), k = min(n, m); R's diagonal as
+    LAPACK's (the reflection maps x to -sign(x_0) |x| e_1)."""
+    n, m = A.shape
+    R = A.copy()
+    Q = np.zeros((n, n))
+    for i in range(n):
+        Q[i, i] = 1.0
+    v = np.zeros(n)
+    for k in range(min(m, n - 1)):
+        s = 0.0
+        for i in range(k, n):
+            s += R[i, k] * R[i, k]
+        if s == 0.0:
+            continue
+        x0 = R[k, k]
+        alpha = -math.copysign(math.sqrt(s), x0)
+        for i in range(k, n):
+            v[i] = R[i, k]
+        v[k] = x0 - alpha
+        vv = s - x0 * x0 + v[k] * v[k]
+        if vv == 0.0:
+            continue
+        beta = 2.0 / vv
+        for j in range(k, m):
+            w = 0.0
+            for i in range(k, n):
+                w += v[i] * R[i, j]
+            w *= beta
+            for i in range(k, n):
+                R[i, j] -= w * v[i]
+        for i in range(n):  # Q <- Q H_k
+            w = 0.0
+            for j in range(k, n):
+                w += Q[i, j] * v[j]
+            w *= beta
+            for j in range(k, n):
+                Q[i, j] -= w * v[j]
+        for i in range(k + 1, n):
+            R[i, k] = 0.0
+    k = min(n, m)
+    return Q[:, :k].copy(), R[:k, :].copy()
+
+
+def qr(A):
+    """(Q, R) of A (n, m) as numpy.linalg.qr's reduced mode, in a fixed order."""
+    A = _f(A)
+    if A.ndim != 2:
+        raise ValueError(f"qr: A must be 2-D; got {A.shape}")
+    return _qr(A)

@@ -424,7 +424,7 @@ def _switch(tracer, pt, order):
     U = pt.u.reshape(prob.n_seg, prob.N2)
     ev = prob.evaluate(pt.u, pt.p, jac=True, jac_p=False)
     M = prob.monodromy(ev.Ms)
-    mu, V = np.linalg.eig(M)
+    mu, V = la.eig(M)
     i = int(np.argmin(np.abs(mu + 1)))
     v = V[:, i].real
     vs = [v]

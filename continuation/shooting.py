@@ -662,7 +662,7 @@ def decay_rate(model):
     Minv = la.inv(sysm.M)
     A = np.block([[np.zeros((N, N)), np.eye(N)],
                   [-la.matmul(Minv, sysm.K), -la.matmul(Minv, sysm.C)]])
-    lam = np.linalg.eigvals(A)
+    lam = la.eigvals(A)
     return max(float(np.min(-lam.real)), 1e-6)
 
 

@@ -18,18 +18,42 @@ def test_exact_answers():
     A = np.array([[0.0, 2.0, 1.0], [1.0, 1.0, 0.0], [4.0, 0.0, 2.0]])  # needs pivoting
     x = np.array([1.0, -2.0, 3.0])
     assert np.array_equal(la.solve(A, A @ x), x)
-    assert la.det(A) == -6.0 and la.det_sign(A) == -1.0
+    assert la.det(A) == -8.0 and la.det_sign(A) == -1.0
     assert la.det_sign(-A) == 1.0
     assert np.array_equal(la.solve(A, np.column_stack([A @ x, 2 * A @ x])),
                           np.column_stack([x, 2 * x]))
     assert np.array_equal(la.matmul(A, la.inv(A) * 6.0).round(12), 6.0 * np.eye(3))
-    assert la.norm(np.array([3e200, 4e200])) == 5e200  # no overflow of the squares
-    assert la.norm(np.array([3e-200, -4e-200])) == 5e-200
+    assert la.norm(np.ldexp([3.0, 4.0], 700)) == np.ldexp(5.0, 700)  # no overflow of squares
+    assert la.norm(np.ldexp([3.0, -4.0], -700)) == np.ldexp(5.0, -700)
     assert np.array_equal(la.norm(np.array([[3.0, 4.0], [0.0, -2.0]])), [5.0, 2.0])
     assert la.dot(np.array([1.0, 2.0]), np.array([3.0, -4.0])) == -5.0
     with pytest.raises(np.linalg.LinAlgError):
         la.solve(np.array([[1.0, 2.0], [2.0, 4.0]]), np.ones(2))
     assert la.det_sign(np.array([[1.0, 2.0], [2.0, 4.0]])) == 0.0
+
+
+def test_eigenvalues_exact():
+    # companion matrix of (x - 1)(x + 2)(x - 3)(x^2 + 4) = x^5 - 2x^4 - x^3 - 2x^2 - 20x + 24:
+    # roots 1, -2, 3, +-2i; an exact similarity by diag(2^-20 ... 2^20) (balancing has work)
+    c = np.array([-2.0, -1.0, -2.0, -20.0, 24.0])
+    Cm = np.zeros((5, 5))
+    Cm[0] = -c
+    Cm[1:, :-1] = np.eye(4)
+    s = np.ldexp(1.0, np.arange(-20, 30, 10))
+    A = Cm * s[:, None] / s[None, :]
+    mu = la.eigvals(A)
+    for w in [3.0, -2.0, 1.0, 2j, -2j]:
+        assert np.min(np.abs(mu - w)) < 1e-13
+    pair = mu[np.abs(mu.imag) > 0.5]
+    assert pair[0].imag > 0 and pair[1] == np.conj(pair[0])  # (a + ib, a - ib), b > 0
+    lam, V = la.eig(A)
+    assert np.allclose(la.norm(V.T.real) ** 2 + la.norm(V.T.imag) ** 2, 1.0, rtol=1e-14)
+    assert np.max(np.abs(A @ V - V * lam)) < 1e-10 * np.max(np.abs(A))
+    R2 = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
+    assert np.allclose(la.eigvals(R2), [np.exp(0.3j), np.exp(-0.3j)], rtol=0, atol=1e-15)
+    Q, R = la.qr(np.array([[3.0, 1.0], [4.0, 2.0]]))
+    assert np.allclose(R, [[-5.0, -2.2], [0.0, 0.4]], rtol=0, atol=1e-15)
+    assert np.allclose(Q, [[-0.6, -0.8], [-0.8, 0.6]], rtol=0, atol=1e-15)
 
 
 def test_agrees_with_numpy_within_roundoff():
@@ -46,6 +70,13 @@ def test_agrees_with_numpy_within_roundoff():
         assert np.allclose(la.matmul(b, A), b @ A, rtol=1e-13, atol=1e-13)
         assert np.isclose(la.norm(b), np.linalg.norm(b), rtol=1e-14)
         assert np.allclose(la.norm(B.T), np.linalg.norm(B.T, axis=1), rtol=1e-14)
+        G = rng.normal(size=(n, n)) * np.logspace(-3, 3, n)[:, None]
+        mu, mu0 = la.eigvals(G), np.linalg.eigvals(G)
+        assert max(np.min(np.abs(mu0 - m)) for m in mu) < 1e-11 * np.max(np.abs(mu0))
+        assert max(np.min(np.abs(mu - m)) for m in mu0) < 1e-11 * np.max(np.abs(mu0))
+        Q, R = la.qr(B)
+        Q0, R0 = np.linalg.qr(B)
+        assert np.allclose(Q, Q0, atol=1e-13) and np.allclose(R, R0, atol=1e-13)
 
 
 def _has_avx2():
@@ -71,7 +102,8 @@ _ROUTINES = """
     from continuation import _linalg as la
     rng = np.random.default_rng(3)
     A = rng.normal(size=(9, 9)); B = rng.normal(size=(9, 9)); b = rng.normal(size=9)
-    out = np.r_[la.solve(A, b), la.matmul(A, B).ravel(), la.norm(b), la.dot(b, A[0]), la.det(A)]
+    out = np.r_[la.solve(A, b), la.matmul(A, B).ravel(), la.norm(b), la.dot(b, A[0]), la.det(A),
+                la.eigvals(A), la.eig(A)[1].ravel(), la.qr(A)[0].ravel()]
     print(out.tobytes().hex())
 """
 
