@@ -22,8 +22,9 @@ import math
 
 import numpy as np
 
-
 from . import _linalg as la
+
+
 #: the formed product is used unless its largest multiplier exceeds this times its smallest
 SPREAD = 1e8
 #: the spread one factor of the product form may carry: the smallest multiplier then keeps

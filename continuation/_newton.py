@@ -5,6 +5,7 @@ import numpy as np
 
 from . import _linalg as la
 
+
 class ConvergenceError(RuntimeError):
     """A Newton iteration did not converge; the message says what to try."""
 

@@ -50,6 +50,7 @@ import numpy as np
 import nlbeam
 from nlbeam.parameters import with_parameter
 
+from . import _linalg as la
 from ._newton import ConvergenceError
 from .shooting import ShootingProblem, _problem_from_state
 
@@ -231,7 +232,7 @@ def _on_normal(prob, z_c, t, z_start, jp, tol=1e-10, max_iter=12, ev0=None, with
         col = ev.Jp * wp / w if jp is None else jp
         A = np.vstack([np.hstack([ev.Ju * w[None, :] / w[:, None], col[:, None]]), t[None, :]])
         try:
-            dz = np.linalg.solve(A, -np.r_[r, t @ (z - z_c)])
+            dz = la.solve(A, -np.r_[r, la.dot(t, z - z_c)])
         except np.linalg.LinAlgError:
             raise ConvergenceError("fold: singular bordered Jacobian") from None
         res = float(np.max(np.abs(r)))
@@ -255,7 +256,7 @@ def _slope(prob, ev, t, jp):
     rhs = np.zeros(len(t))
     rhs[-1] = 1.0
     try:
-        tau = np.linalg.solve(A, rhs)
+        tau = la.solve(A, rhs)
     except np.linalg.LinAlgError:
         raise ConvergenceError("fold: singular bordered Jacobian") from None
     return float(tau[-1]), tau

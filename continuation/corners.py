@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._newton import ConvergenceError
 from . import _linalg as la
+from ._newton import ConvergenceError
 
 
 def tangent(J, t_prev):

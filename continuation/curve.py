@@ -18,6 +18,7 @@ import nlbeam
 
 from nlbeam.parameters import check_parameter, get_parameter, parameter_names, with_parameter
 
+from . import _linalg as la
 from ._newton import ContinuationWarning, ConvergenceError
 from .extended import KINDS, CurveSystem
 from .pathfollow import test_functions
@@ -132,8 +133,8 @@ def _tangent(J, t_prev):
     A = np.vstack([J, t_prev[None, :]])
     rhs = np.zeros(A.shape[0])
     rhs[-1] = 1.0
-    t = np.linalg.solve(A, rhs)
-    return t / np.linalg.norm(t)
+    t = la.solve(A, rhs)
+    return t / la.norm(t)
 
 
 def _null(J):
@@ -172,12 +173,12 @@ class _Tracer:
         renewed = False  # a Jacobian was computed in this call
         for it in range(self.max_iter):
             st = s.evaluate(z, jac=A is None)
-            F = np.r_[st.G, row @ z - rhs]
+            F = np.r_[st.G, la.dot(row, z) - rhs]
             if A is None:
                 A, fresh = np.vstack([st.J, row[None, :]]), True
                 renewed = True
             elif dz is not None:
-                A = A + np.outer(F - F_prev - A @ dz, dz) / (dz @ dz)  # Broyden
+                A = A + np.outer(F - F_prev - la.matmul(A, dz), dz) / la.dot(dz, dz)  # Broyden
             res = float(np.max(np.abs(F)))
             if not np.isfinite(res):
                 break
@@ -195,7 +196,7 @@ class _Tracer:
                 continue
             res_prev = res
             try:
-                step = np.linalg.solve(A, -F)
+                step = la.solve(A, -F)
             except np.linalg.LinAlgError:
                 break
             fresh = False
@@ -207,7 +208,7 @@ class _Tracer:
             dz = c * step
             z = z + dz
             F_prev = F
-            if radius is not None and np.linalg.norm(z - z_first) > radius:
+            if radius is not None and la.norm(z - z_first) > radius:
                 break  # wandering off the prediction (towards a neighbouring curve)
         raise ConvergenceError(f"{s.kind} curve: corrector did not converge near "
                                f"{s.point(z)[0]:.9g} Hz, {s.parameter} = {s.point(z)[1]:.6g}")
@@ -291,12 +292,12 @@ class _Tracer:
         unknowns: after ``adapt`` the shooting states of the same orbit are not the start's."""
         k = slice(self.s.n, self.s.n + 2)
         t0 = p0.t[k]
-        if np.linalg.norm(t0) < 1e-12:
+        if la.norm(t0) < 1e-12:
             return False
         da, db = a.st.z[k] - p0.st.z[k], b.st.z[k] - p0.st.z[k]
-        if (da @ t0) * (db @ t0) > 0 or min(np.linalg.norm(da), np.linalg.norm(db)) > ds:
+        if la.dot(da, t0) * la.dot(db, t0) > 0 or min(la.norm(da), la.norm(db)) > ds:
             return False
-        near = a if np.linalg.norm(da) < np.linalg.norm(db) else b
+        near = a if la.norm(da) < la.norm(db) else b
         size = max(float(np.max(np.abs(p0.state0))), 1e-300)
         # the nearest point lies within a step of the start (a step moves the scaled
         # unknowns by ds): its state within twice that
@@ -342,10 +343,10 @@ class _Tracer:
                 # impatient (one renewal) while the step is long, patient when it is short:
                 # a step that fails is cheaper halved than iterated on, but a short step
                 # next to a corner needs the iterations (else the trace ends in underflow)
-                st, it = self.correct(z_pred, a.t, a.t @ z_pred, a.st.J, radius=2 * ds + 0.01,
+                st, it = self.correct(z_pred, a.t, la.dot(a.t, z_pred), a.st.J, radius=2 * ds + 0.01,
                                       max_renewals=1 if ds > 0.1 * self.ds0 else None)
                 t = _tangent(st.J, a.t)
-                if t @ a.t < self.cos_max:
+                if la.dot(t, a.t) < self.cos_max:
                     raise ConvergenceError("angle")
             except ConvergenceError:
                 ds_fail = ds
@@ -392,8 +393,8 @@ class _Tracer:
             pts.append(b)
             # closed curve: back next to the start after going round
             if len(pts) > 4 and (self._closes(p0, a, b, ds) or (
-                    np.linalg.norm(b.st.z - z_start) < 0.5 * ds
-                    and (b.st.z - z_start) @ p0.t < 0 <= (a.st.z - z_start) @ p0.t + 1e-300)):
+                    la.norm(b.st.z - z_start) < 0.5 * ds
+                    and la.dot(b.st.z - z_start, p0.t) < 0 <= la.dot(a.st.z - z_start, p0.t) + 1e-300)):
                 return pts, "closed"
             t_plane = b.t[s.n:s.n + 2].copy()
             rephased = False
@@ -402,7 +403,7 @@ class _Tracer:
                 st3 = s.evaluate(new)
                 t3 = _null(st3.J)
                 # orientation: keep the direction in the (frequency, parameter) plane
-                if t3[s.n:s.n + 2] @ t_plane < 0:
+                if la.dot(t3[s.n:s.n + 2], t_plane) < 0:
                     t3 = -t3
                 b = self.make_point(st3, t3, b.exact)
                 pts[-1] = b
@@ -414,7 +415,7 @@ class _Tracer:
                 # fold curves near 10 Hz: renewing at every point made the first quasi-Newton
                 # step raise the residual, a fresh Jacobian at every point, and failed steps)
                 s.renew_borders(b.st.z)
-            ds = self._next_ds(ds, it, t @ a.t)
+            ds = self._next_ds(ds, it, la.dot(t, a.t))
             if ds_fail is not None:  # not back to a step that failed: grow below it
                 ds = min(ds, 0.7 * ds_fail)
                 ds_fail = ds_fail * 1.2 if ds_fail * 1.2 < self.ds_max else None
@@ -436,7 +437,7 @@ def _locate(tr, a, b, fun, iters=40, rel=1e-9, tangent=False):
     on the corrected curve (its integration error is not in it)."""
     za, zb = a.st.z, b.st.z
     d = zb - za
-    L = float(np.linalg.norm(d))
+    L = la.norm(d)
     if L == 0:
         return a, (0.0, 0.0)
     e = d / L
@@ -454,7 +455,7 @@ def _locate(tr, a, b, fun, iters=40, rel=1e-9, tangent=False):
             w = 1e-3 * (hi - lo)  # strictly inside
             mid = min(max(mid, lo + w), hi - w)
         try:
-            st, _ = tr.correct(za + mid * e, e, e @ za + mid, a.st.J, jac=tangent)
+            st, _ = tr.correct(za + mid * e, e, la.dot(e, za) + mid, a.st.J, jac=tangent)
         except ConvergenceError:
             break
         t = _tangent(st.J, a.t) if st.J is not None else e

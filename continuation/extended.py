@@ -29,6 +29,7 @@ import numpy as np
 
 from nlbeam.parameters import get_parameter, with_parameter
 
+from . import _linalg as la
 from ._newton import ConvergenceError
 from .shooting import _problem_from_state, event_elements
 
@@ -70,7 +71,7 @@ def bordered(A, b, c):
     K[n, :n] = c
     rhs = np.zeros(n + 1)
     rhs[n] = 1.0
-    return float(np.linalg.solve(K, rhs)[n])
+    return float(la.solve(K, rhs)[n])
 
 
 def borders(A):
@@ -105,8 +106,8 @@ def nearest_grazing(prob, u0, f, elements, phase=None):
     a = max(float(np.max(np.abs(tr.x))), 1e-300)
     v_scale = a * 2 * np.pi * f / prob.order
     for e in elements:
-        d = tr.x @ w[e] + wy[e] * y - gap[e]
-        dd = tr.v @ w[e] + wy[e] * yd
+        d = la.matmul(tr.x, w[e]) + wy[e] * y - gap[e]
+        dd = la.matmul(tr.v, w[e]) + wy[e] * yd
         dc = d[:-1]  # one period, periodic
         k = np.nonzero((dc >= np.roll(dc, 1)) & (dc > np.roll(dc, -1)))[0]
         for i in k:
@@ -253,8 +254,8 @@ class CurveSystem:
         e = self.element
         N = model.n_dof
         y, yd = ex.evaluate(ph / f)
-        return (float(w[e] @ s[:N] + wy[e] * y[0] - gap[e]),
-                float(w[e] @ s[N:] + wy[e] * yd[0]))
+        return (float(la.dot(w[e], s[:N]) + wy[e] * y[0] - gap[e]),
+                float(la.dot(w[e], s[N:]) + wy[e] * yd[0]))
 
     def _grazing_rows(self, z):
         u, f, p = self.unpack(z)

@@ -29,8 +29,8 @@ from nlbeam.solver import Solver, period_step, phase_step
 from nlbeam.vocabulary import METHODS as METHOD_NAMES
 
 from . import _flowcache
-from ._newton import ConvergenceError, ContinuationWarning, newton
 from . import _linalg as la
+from ._newton import ConvergenceError, ContinuationWarning, newton
 from .pathfollow import Problem
 
 
