@@ -536,3 +536,76 @@ def qr(A):
     if A.ndim != 2:
         raise ValueError(f"qr: A must be 2-D; got {A.shape}")
     return _qr(A)
+
+
+@njit(cache=True)
+def _full_q_last(A):
+    """The last column of the full Q of A's Householder QR (A (n, m), n > m): a unit vector
+    orthogonal to A's columns."""
+    n, m = A.shape
+    R = A.copy()
+    q = np.zeros(n)
+    q[n - 1] = 1.0
+    vs = np.zeros((m, n))
+    betas = np.zeros(m)
+    for k in range(m):
+        s = 0.0
+        for i in range(k, n):
+            s += R[i, k] * R[i, k]
+        if s == 0.0:
+            continue
+        x0 = R[k, k]
+        alpha = -math.copysign(math.sqrt(s), x0)
+        for i in range(k, n):
+            vs[k, i] = R[i, k]
+        vs[k, k] = x0 - alpha
+        vv = s - x0 * x0 + vs[k, k] * vs[k, k]
+        if vv == 0.0:
+            continue
+        betas[k] = 2.0 / vv
+        for j in range(k, m):
+            w = 0.0
+            for i in range(k, n):
+                w += vs[k, i] * R[i, j]
+            w *= betas[k]
+            for i in range(k, n):
+                R[i, j] -= w * vs[k, i]
+    for k in range(m - 1, -1, -1):  # q = H_0 ... H_{m-1} e_{n-1}
+        w = 0.0
+        for i in range(k, n):
+            w += vs[k, i] * q[i]
+        w *= betas[k]
+        for i in range(k, n):
+            q[i] -= w * vs[k, i]
+    return q
+
+
+def null_vector(J):
+    """A unit null vector of J (m, m + 1) of full rank (from the QR of J^T); its sign is
+    fixed but arbitrary: callers orient it."""
+    J = _f(J)
+    if J.ndim != 2 or J.shape[1] != J.shape[0] + 1:
+        raise ValueError(f"null_vector: J must be (m, m + 1); got {J.shape}")
+    return _full_q_last(np.ascontiguousarray(J.T))
+
+
+def smallest_singular_vectors(A, iterations=4):
+    """(u, v): unit left and right singular vectors of the smallest singular value of a square
+    A, by inverse iteration on A^T A from a fixed start (converging as (s_min / s_next)^2 per
+    iteration: fast where A is nearly singular); signs fixed (the largest component of v
+    positive). numpy's SVD where A is exactly singular (a zero pivot)."""
+    A = _f(A)
+    n = A.shape[0]
+    try:
+        v = np.ones(n) / math.sqrt(n)
+        for _ in range(iterations):
+            v = solve(A, solve(A.T, v))
+            v = v / norm(v)
+        u = solve(A.T, v)
+        u = u / norm(u)
+    except np.linalg.LinAlgError:
+        U, _, Vt = np.linalg.svd(A)
+        u, v = U[:, -1].copy(), Vt[-1].copy()
+    if v[np.argmax(np.abs(v))] < 0:
+        u, v = -u, -v
+    return u, v

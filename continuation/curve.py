@@ -139,7 +139,7 @@ def _tangent(J, t_prev):
 
 def _null(J):
     """A unit null vector of J (D - 1, D)."""
-    return np.linalg.svd(J)[2][-1]
+    return la.null_vector(J)
 
 
 class _Tracer:

@@ -76,8 +76,7 @@ def bordered(A, b, c):
 
 def borders(A):
     """(b, c): the left and right singular vectors of A's smallest singular value."""
-    U, s, Vt = np.linalg.svd(A)
-    return U[:, -1].copy(), Vt[-1].copy()
+    return la.smallest_singular_vectors(A)
 
 
 @dataclasses.dataclass

@@ -51,6 +51,9 @@ def test_eigenvalues_exact():
     assert np.max(np.abs(A @ V - V * lam)) < 1e-10 * np.max(np.abs(A))
     R2 = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
     assert np.allclose(la.eigvals(R2), [np.exp(0.3j), np.exp(-0.3j)], rtol=0, atol=1e-15)
+    t = la.null_vector(np.array([[1.0, 2.0, 2.0], [0.0, 1.0, -1.0]]))
+    assert np.allclose(np.abs(t), np.array([4.0, 1.0, 1.0]) / np.sqrt(18.0), rtol=0, atol=1e-15)
+    assert np.allclose(t[1:] / t[0], [-0.25, -0.25], rtol=0, atol=1e-15)
     Q, R = la.qr(np.array([[3.0, 1.0], [4.0, 2.0]]))
     assert np.allclose(R, [[-5.0, -2.2], [0.0, 0.4]], rtol=0, atol=1e-15)
     assert np.allclose(Q, [[-0.6, -0.8], [-0.8, 0.6]], rtol=0, atol=1e-15)
@@ -74,6 +77,16 @@ def test_agrees_with_numpy_within_roundoff():
         mu, mu0 = la.eigvals(G), np.linalg.eigvals(G)
         assert max(np.min(np.abs(mu0 - m)) for m in mu) < 1e-11 * np.max(np.abs(mu0))
         assert max(np.min(np.abs(mu - m)) for m in mu0) < 1e-11 * np.max(np.abs(mu0))
+        J = rng.normal(size=(n, n + 1))
+        t, t0 = la.null_vector(J), np.linalg.svd(J)[2][-1]
+        assert np.isclose(la.norm(t), 1.0, rtol=1e-15) and np.allclose(J @ t, 0.0, atol=1e-13)
+        assert np.allclose(t * np.sign(la.dot(t, t0)), t0, atol=1e-12)
+        if n > 1:  # nearly singular: s_min 1e-6 s_next
+            U0, sv, Vt0 = np.linalg.svd(A)
+            S = (U0 * np.r_[sv[:-1], 1e-6 * sv[-2]]) @ Vt0
+            u, v = la.smallest_singular_vectors(S)
+            assert abs(abs(la.dot(u, U0[:, -1])) - 1.0) < 1e-12
+            assert abs(abs(la.dot(v, Vt0[-1])) - 1.0) < 1e-12
         Q, R = la.qr(B)
         Q0, R0 = np.linalg.qr(B)
         assert np.allclose(Q, Q0, atol=1e-13) and np.allclose(R, R0, atol=1e-13)
@@ -103,7 +116,8 @@ _ROUTINES = """
     rng = np.random.default_rng(3)
     A = rng.normal(size=(9, 9)); B = rng.normal(size=(9, 9)); b = rng.normal(size=9)
     out = np.r_[la.solve(A, b), la.matmul(A, B).ravel(), la.norm(b), la.dot(b, A[0]), la.det(A),
-                la.eigvals(A), la.eig(A)[1].ravel(), la.qr(A)[0].ravel()]
+                la.eigvals(A), la.eig(A)[1].ravel(), la.qr(A)[0].ravel(),
+                la.null_vector(A[:8])]
     print(out.tobytes().hex())
 """
 
