@@ -343,7 +343,8 @@ class _Tracer:
                 # impatient (one renewal) while the step is long, patient when it is short:
                 # a step that fails is cheaper halved than iterated on, but a short step
                 # next to a corner needs the iterations (else the trace ends in underflow)
-                st, it = self.correct(z_pred, a.t, la.dot(a.t, z_pred), a.st.J, radius=2 * ds + 0.01,
+                st, it = self.correct(z_pred, a.t, la.dot(a.t, z_pred), a.st.J,
+                                      radius=2 * ds + 0.01,
                                       max_renewals=1 if ds > 0.1 * self.ds0 else None)
                 t = _tangent(st.J, a.t)
                 if la.dot(t, a.t) < self.cos_max:
@@ -394,7 +395,8 @@ class _Tracer:
             # closed curve: back next to the start after going round
             if len(pts) > 4 and (self._closes(p0, a, b, ds) or (
                     la.norm(b.st.z - z_start) < 0.5 * ds
-                    and la.dot(b.st.z - z_start, p0.t) < 0 <= la.dot(a.st.z - z_start, p0.t) + 1e-300)):
+                    and la.dot(b.st.z - z_start, p0.t) < 0
+                    <= la.dot(a.st.z - z_start, p0.t) + 1e-300)):
                 return pts, "closed"
             t_plane = b.t[s.n:s.n + 2].copy()
             rephased = False
