@@ -987,11 +987,12 @@ def _vertex(f, x):
     plane (f / f_mid, x / x_mid); f(s) interpolated by the parabola through the same points."""
     F, X = f / f[1], x / x[1]
     s = np.r_[0.0, np.cumsum(np.hypot(np.diff(F), np.diff(X)))]
-    cx = np.polyfit(s, x, 2)
+    V = np.column_stack([s * s, s, np.ones(3)])  # the parabolas through the three points
+    cx = la.solve(V, x)
     if cx[0] >= 0:
         return float(f[1]), float(x[1])
     s_star = float(np.clip(-cx[1] / (2 * cx[0]), s[0], s[-1]))
-    return float(np.polyval(np.polyfit(s, f, 2), s_star)), float(np.polyval(cx, s_star))
+    return float(np.polyval(la.solve(V, f), s_star)), float(np.polyval(cx, s_star))
 
 
 def _superharmonics(branches, model, integrator, orders=(2, 3), window=0.15, min_ratio=0.15):

@@ -157,3 +157,19 @@ def test_diagram_is_the_same_under_two_openblas_core_types():
     AVX2/FMA ones (before continuation._linalg it did not: see the commit)."""
     a, b = _run("Prescott", _SCENE), _run("Haswell", _SCENE)
     assert a == b
+
+
+def test_resonance_peak_of_three_points_is_exact():
+    """continuation.diagram._vertex (the parabola through three branch points, solved by
+    _linalg instead of numpy.polyfit): symmetric points peak at the middle one; a parabola
+    sampled at three points is reproduced exactly."""
+    from continuation.diagram import _vertex
+    assert _vertex(np.array([9.0, 10.0, 11.0]), np.array([1.0, 2.0, 1.0])) == (10.0, 2.0)
+    f = np.array([10.0, 10.5, 11.0])
+    x = np.array([1.0, 2.0, 1.5])
+    F, X = f / f[1], x / x[1]
+    s = np.r_[0.0, np.cumsum(np.hypot(np.diff(F), np.diff(X)))]
+    cx, cf = np.polyfit(s, x, 2), np.polyfit(s, f, 2)
+    s_star = -cx[1] / (2 * cx[0])
+    assert np.allclose(_vertex(f, x), (np.polyval(cf, s_star), np.polyval(cx, s_star)),
+                       rtol=1e-13)
