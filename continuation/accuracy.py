@@ -616,7 +616,7 @@ def refined_point(prob, u, p, mu0, *, level=1, jac=None, newton_limit=1e-3):
     fine = at_level(prob, level)
     ev = fine.evaluate(u, p, jac=jac is None, jac_p=False)
     try:
-        du = np.linalg.solve(ev.Ju if jac is None else jac, -ev.R)
+        du = la.solve(ev.Ju if jac is None else jac, -ev.R)
     except np.linalg.LinAlgError:
         du = np.full_like(u, np.nan)
     want = mu0 is not None

@@ -332,10 +332,10 @@ class _Tracer:
             if prev is not None and len(prev) == len(a.st.z) and not s.grazing:
                 # quadratic predictor: the parabola along the tangent through the last
                 # point back to the one before (the curvature term, if it is small)
-                h = float(np.linalg.norm(a.st.z - prev))
+                h = la.norm(a.st.z - prev)
                 if h > 0:
                     bend = ds * ds * (prev - a.st.z + h * a.t) / h ** 2
-                    if np.linalg.norm(bend) >= 0.5 * ds:
+                    if la.norm(bend) >= 0.5 * ds:
                         bend = None
             if bend is not None and quad:
                 z_pred = z_pred + bend
@@ -361,7 +361,7 @@ class _Tracer:
                 # (on a smooth curve the parabola; where the curve bends at kinks, e.g.
                 # along a grazing curve, the tangent may)
                 z_tan = a.st.z + ds * a.t
-                quad = (np.linalg.norm(st.z - z_tan - bend) < np.linalg.norm(st.z - z_tan))
+                quad = (la.norm(st.z - z_tan - bend) < la.norm(st.z - z_tan))
             hit = self._cross_targets(a, b)
             if hit is not None:
                 k, q, why = hit
