@@ -19,6 +19,19 @@ from numba import njit
 
 
 @njit(cache=True)
+def _pivot_row(LU, k):
+    """(p, |LU[p, k]|): the first row p >= k of largest modulus in column k (partial
+    pivoting)."""
+    p = k
+    big = abs(LU[k, k])
+    for i in range(k + 1, LU.shape[0]):
+        if abs(LU[i, k]) > big:
+            big = abs(LU[i, k])
+            p = i
+    return p, big
+
+
+@njit(cache=True)
 def _lu_solve(A, B):
     """X with A X = B (A (n, n), B (n, m)) by LU with partial pivoting (the first row of
     largest modulus); ok False when a pivot is exactly zero."""
@@ -27,12 +40,7 @@ def _lu_solve(A, B):
     LU = A.copy()
     X = B.copy()
     for k in range(n):
-        p = k
-        big = abs(LU[k, k])
-        for i in range(k + 1, n):
-            if abs(LU[i, k]) > big:
-                big = abs(LU[i, k])
-                p = i
+        p, big = _pivot_row(LU, k)
         if big == 0.0 or not math.isfinite(big):
             return X, big == 0.0
         if p != k:
@@ -66,12 +74,7 @@ def _lu_det(A):
     sign = 1.0
     det = 1.0
     for k in range(n):
-        p = k
-        big = abs(LU[k, k])
-        for i in range(k + 1, n):
-            if abs(LU[i, k]) > big:
-                big = abs(LU[i, k])
-                p = i
+        p, big = _pivot_row(LU, k)
         if big == 0.0:
             return 0.0, 0.0
         if p != k:
@@ -486,6 +489,36 @@ def eig(A):
 
 
 @njit(cache=True)
+def _householder_step(R, k, v):
+    """Step k of a Householder QR in place: the reflection H_k = I - beta v v^T (v in v[k:])
+    that maps R[k:, k] to -sign(R[k, k]) |R[k:, k]| e_k, applied to R's columns k...
+    Returns beta; 0 where R[k:, k] needs no reflection (R and, where it is zero, v left)."""
+    n, m = R.shape
+    s = 0.0
+    for i in range(k, n):
+        s += R[i, k] * R[i, k]
+    if s == 0.0:
+        return 0.0
+    x0 = R[k, k]
+    alpha = -math.copysign(math.sqrt(s), x0)
+    for i in range(k, n):
+        v[i] = R[i, k]
+    v[k] = x0 - alpha
+    vv = s - x0 * x0 + v[k] * v[k]
+    if vv == 0.0:
+        return 0.0
+    beta = 2.0 / vv
+    for j in range(k, m):
+        w = 0.0
+        for i in range(k, n):
+            w += v[i] * R[i, j]
+        w *= beta
+        for i in range(k, n):
+            R[i, j] -= w * v[i]
+    return beta
+
+
+@njit(cache=True)
 def _qr(A):
     """Householder QR of A (n, m): (Q (n, k), R (k, m)), k = min(n, m); R's diagonal as
     LAPACK's (the reflection maps x to -sign(x_0) |x| e_1)."""
@@ -496,27 +529,9 @@ def _qr(A):
         Q[i, i] = 1.0
     v = np.zeros(n)
     for k in range(min(m, n - 1)):
-        s = 0.0
-        for i in range(k, n):
-            s += R[i, k] * R[i, k]
-        if s == 0.0:
+        beta = _householder_step(R, k, v)
+        if beta == 0.0:
             continue
-        x0 = R[k, k]
-        alpha = -math.copysign(math.sqrt(s), x0)
-        for i in range(k, n):
-            v[i] = R[i, k]
-        v[k] = x0 - alpha
-        vv = s - x0 * x0 + v[k] * v[k]
-        if vv == 0.0:
-            continue
-        beta = 2.0 / vv
-        for j in range(k, m):
-            w = 0.0
-            for i in range(k, n):
-                w += v[i] * R[i, j]
-            w *= beta
-            for i in range(k, n):
-                R[i, j] -= w * v[i]
         for i in range(n):  # Q <- Q H_k
             w = 0.0
             for j in range(k, n):
@@ -549,27 +564,7 @@ def _full_q_last(A):
     vs = np.zeros((m, n))
     betas = np.zeros(m)
     for k in range(m):
-        s = 0.0
-        for i in range(k, n):
-            s += R[i, k] * R[i, k]
-        if s == 0.0:
-            continue
-        x0 = R[k, k]
-        alpha = -math.copysign(math.sqrt(s), x0)
-        for i in range(k, n):
-            vs[k, i] = R[i, k]
-        vs[k, k] = x0 - alpha
-        vv = s - x0 * x0 + vs[k, k] * vs[k, k]
-        if vv == 0.0:
-            continue
-        betas[k] = 2.0 / vv
-        for j in range(k, m):
-            w = 0.0
-            for i in range(k, n):
-                w += vs[k, i] * R[i, j]
-            w *= betas[k]
-            for i in range(k, n):
-                R[i, j] -= w * vs[k, i]
+        betas[k] = _householder_step(R, k, vs[k])
     for k in range(m - 1, -1, -1):  # q = H_0 ... H_{m-1} e_{n-1}
         w = 0.0
         for i in range(k, n):
