@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from . import _linalg as la
+from nlbeam import _linalg as la
 
 
 #: the formed product is used unless its largest multiplier exceeds this times its smallest

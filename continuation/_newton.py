@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _linalg as la
+from nlbeam import _linalg as la
 
 
 class ConvergenceError(RuntimeError):

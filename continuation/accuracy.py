@@ -50,7 +50,7 @@ import numpy as np
 import nlbeam
 from nlbeam.parameters import with_parameter
 
-from . import _linalg as la
+from nlbeam import _linalg as la
 from ._newton import ConvergenceError
 from .shooting import ShootingProblem, _problem_from_state
 

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _linalg as la
+from nlbeam import _linalg as la
 from ._newton import ConvergenceError
 
 

@@ -18,7 +18,7 @@ import nlbeam
 
 from nlbeam.parameters import check_parameter, get_parameter, parameter_names, with_parameter
 
-from . import _linalg as la
+from nlbeam import _linalg as la
 from ._newton import ContinuationWarning, ConvergenceError
 from .extended import KINDS, CurveSystem
 from .pathfollow import test_functions

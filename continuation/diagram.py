@@ -16,7 +16,7 @@ from nlbeam.solver import period_step
 from nlbeam.summary import Summary, describe_value
 
 from . import _arguments as _args
-from . import _linalg as la
+from nlbeam import _linalg as la
 from ._newton import ContinuationWarning, ConvergenceError
 from .parallel import Speculator, take, taken
 from .pathfollow import Tracer

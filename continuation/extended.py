@@ -29,7 +29,7 @@ import numpy as np
 
 from nlbeam.parameters import get_parameter, with_parameter
 
-from . import _linalg as la
+from nlbeam import _linalg as la
 from ._newton import ConvergenceError
 from .shooting import _problem_from_state, event_elements
 

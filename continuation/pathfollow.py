@@ -10,7 +10,7 @@ from typing import Protocol
 
 import numpy as np
 
-from . import _linalg as la
+from nlbeam import _linalg as la
 from ._newton import ContinuationWarning, ConvergenceError
 from .corners import (JUMP_HS, Retrace, check_crossing, far_side, map_jump,
                       smooth_fold_beside, tangent)

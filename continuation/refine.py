@@ -20,7 +20,7 @@ import numpy as np
 
 from nlbeam.summary import Summary
 
-from . import _linalg as la
+from nlbeam import _linalg as la
 from ._newton import ConvergenceError
 from .shooting import Integrator, _problem_from_state
 

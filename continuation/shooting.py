@@ -29,7 +29,7 @@ from nlbeam.solver import Solver, period_step, phase_step
 from nlbeam.vocabulary import METHODS as METHOD_NAMES
 
 from . import _flowcache
-from . import _linalg as la
+from nlbeam import _linalg as la
 from ._newton import ConvergenceError, ContinuationWarning, newton
 from .pathfollow import Problem
 

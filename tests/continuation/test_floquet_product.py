@@ -62,7 +62,7 @@ def test_a_complex_dominant_pair_is_deflated_together():
 
 
 def test_moderate_spread_keeps_the_formed_product_bit_for_bit():
-    from continuation import _linalg as la  # the continuation's machine-independent routines
+    from nlbeam import _linalg as la  # the continuation's machine-independent routines
     Ms = _segments(np.array([50.0, 0.02]), 8)
     assert 50.0 / 0.02 < SPREAD
     M = np.eye(2)

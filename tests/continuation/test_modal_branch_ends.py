@@ -70,7 +70,7 @@ def test_without_the_probe_the_same_end_is_given_up_or_costs_more_work():
     print(f"flows: {tr0.n_evaluations} without the probe ({reason0}), {tr.n_evaluations} "
           f"with it; points {len(pts0)}, {len(pts)}")
     # (measured on main a9db3e3, both eager: 923 flows with the probe, 1059 without; 487
-    # and 893 before its contact step caps; with continuation._linalg: step underflow at
+    # and 893 before its contact step caps; with nlbeam._linalg: step underflow at
     # 12.017510 Hz after 685 flows without the probe, the jump at 12.017508 Hz after 717)
     if reason0 == "discontinuous map":
         assert tr.n_evaluations < 0.9 * tr0.n_evaluations

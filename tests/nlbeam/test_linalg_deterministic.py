@@ -1,4 +1,4 @@
-"""continuation._linalg: small dense linear algebra in a fixed order of operations, so that a
+"""nlbeam._linalg: small dense linear algebra in a fixed order of operations, so that a
 diagram does not depend on which BLAS/LAPACK kernels OpenBLAS picks for the CPU
 (OPENBLAS_CORETYPE). Exact answers, agreement with numpy within round-off, and the same
 results, bit for bit, under two OpenBLAS core types (in subprocesses)."""
@@ -11,7 +11,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from continuation import _linalg as la
+from nlbeam import _linalg as la
 
 
 def test_exact_answers():
@@ -112,7 +112,7 @@ def _run(coretype, code):
 
 _ROUTINES = """
     import numpy as np
-    from continuation import _linalg as la
+    from nlbeam import _linalg as la
     rng = np.random.default_rng(3)
     A = rng.normal(size=(9, 9)); B = rng.normal(size=(9, 9)); b = rng.normal(size=9)
     out = np.r_[la.solve(A, b), la.matmul(A, B).ravel(), la.norm(b), la.dot(b, A[0]), la.det(A),
@@ -154,7 +154,7 @@ def test_routines_are_the_same_under_two_openblas_core_types():
 def test_diagram_is_the_same_under_two_openblas_core_types():
     """The switched-branch scene (paper model, 12.3-14.2 Hz, orders 1-2) gives the same
     branches and bifurcations, bit for bit, with OpenBLAS's SSE3 kernels as with its
-    AVX2/FMA ones (before continuation._linalg it did not: see the commit)."""
+    AVX2/FMA ones (before nlbeam._linalg it did not: see the commit)."""
     a, b = _run("Prescott", _SCENE), _run("Haswell", _SCENE)
     assert a == b
 
