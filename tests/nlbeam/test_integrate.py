@@ -392,6 +392,46 @@ def test_the_inlined_variational_step_is_the_tableau_step_bit_for_bit():
     assert n_cases == 160
 
 
+def test_the_unrolled_dp5_step_is_the_tableau_step_bit_for_bit():
+    # the plain DP5 step (stochastic.simulate's default) is unrolled, its excitation at the
+    # stage times looked up in one call (steps._dp5_excitation); it must give the tableau
+    # loops' new state and error vector exactly, on every excitation kind, a quintic
+    # coefficient table (a noise block) included, or every adaptive result would change
+    from nlbeam._kernels import steps
+
+    rng = np.random.default_rng(3)
+    n = 41
+    quintic = nlbeam.Sampled.from_table(0.0, 2e-3, rng.normal(size=(n, 4)) * [1e-4, 1e-2, 1.0,
+                                                                             1e2])
+    assert quintic.kernel_args()[0] == 4
+    cases = [(m, e, t, s, d) for m, e, t, s, d, _ in _field_cases()]
+    cases += [(m, quintic, t, s, d) for m, e, t, s, d in cases[:40]]
+    for model, exc, t, s, disc in cases:
+        kc = KernelCall(model, exc)
+        n2, ne = 2 * model.n_dof, model.n_elements
+        P, dvm = np.zeros((n2, 1)), np.zeros((ne, 1))
+        st, f0, _, _ = kc.deriv(t, s, P, dvm, disc)
+        assert st == 0
+        out = []
+        for fn in (steps._rk_step_plain, steps._rk_step_tableau):
+            s_out, err = np.zeros(n2), np.full(n2, np.nan)
+            args = (kc.sysa, kc.xc, kc.xp, kc.xtab)
+            work = (np.zeros((7, n2)), np.zeros((7, n2, 1)), np.zeros(n2))
+            if fn is steps._rk_step_plain:
+                st = fn(_kernels.DP5, t, 3e-5, s, P, dvm, disc, *args, f0, s_out, *work,
+                        np.zeros(ne), err)
+            else:
+                st = fn(_kernels.DP5, t, 3e-5, s, P, dvm, disc, False, *args, f0, s_out,
+                        np.zeros((n2, 1)), *work[:2], work[2], np.zeros((n2, 1)), np.zeros(ne),
+                        err)
+            assert st == 0
+            out.append((s_out, err))
+        np.testing.assert_array_equal(out[0][0], out[1][0])
+        np.testing.assert_array_equal(out[0][1], out[1][1])
+        assert np.all(np.isfinite(out[0][1]))
+    assert len(cases) == 200
+
+
 def test_the_unrolled_graded_step_is_the_tableau_step_bit_for_bit():
     # rk_step_graded (the steps in sqrt(t - t_onset) and sqrt(delta) at a contact's ends) is
     # unrolled for RK4 with the field inlined; the reference is its tableau loops in Python
