@@ -7,8 +7,8 @@ from .codes import (_A_DP5, _A_RK2, _A_RK4, _B_DP5, _B_RK2, _B_RK4, _BH_DP5, _C_
                     _D62, _D63, _D64, _D65, _DB1, _DB3, _DB4, _DB5, _DB6, _DC2, _DC3, _DC4, _DC5,
                     _DC6, _DC7, _DE1, _DE3, _DE4, _DE5, _DE6, _DE7, _R3, _R6, _RA21, _RA32, _RA43,
                     _RC1, _RC2, _RC3, _RC4, DP5, ERR_NONFINITE, RK2, RK4)
-from .excite import excite_yyd, excite_yyd_inline
-from .field import _deriv_plain_at, _deriv_var_at, deriv, deriv_plain, deriv_var
+from .excite import excite_yyd
+from .field import _deriv_var_at, deriv, deriv_plain, deriv_var
 from .hook import _HAS_USER, njit
 
 
@@ -56,87 +56,6 @@ def _rk_step_plain(meth, t, h, s, P, dvm, disc, sysa, xc, xp, xtab, f0, s_out, K
                 return ERR_NONFINITE
         return 0
     # DP5
-    if _HAS_USER:
-        return _dp5_step_tableau_free(t, h, s, P, dvm, disc, sysa, xc, xp, xtab, s_out, KS, KP,
-                                      ytmp, fel, err_w)
-    # the excitation at the stage times t + c_i h (c_6 = c_7 = 1) in one call (they do not
-    # depend on the state): one call instead of six, each passing both excitation arrays
-    st, y2, d2, y3, d3, y4, d4, y5, d5, y6, d6 = _dp5_excitation(t, h, xc, xp, xtab)
-    if st != 0:
-        return st
-    for q in range(n):
-        ytmp[q] = s[q] + h * _D21 * KS[0, q]
-    _deriv_plain_at(y2, d2, ytmp, disc, sysa, KS[1], fel)
-    for q in range(n):
-        acc = s[q] + h * _D31 * KS[0, q]
-        ytmp[q] = acc + h * _D32 * KS[1, q]
-    _deriv_plain_at(y3, d3, ytmp, disc, sysa, KS[2], fel)
-    for q in range(n):
-        acc = s[q] + h * _D41 * KS[0, q]
-        acc += h * _D42 * KS[1, q]
-        ytmp[q] = acc + h * _D43 * KS[2, q]
-    _deriv_plain_at(y4, d4, ytmp, disc, sysa, KS[3], fel)
-    for q in range(n):
-        acc = s[q] + h * _D51 * KS[0, q]
-        acc += h * _D52 * KS[1, q]
-        acc += h * _D53 * KS[2, q]
-        ytmp[q] = acc + h * _D54 * KS[3, q]
-    _deriv_plain_at(y5, d5, ytmp, disc, sysa, KS[4], fel)
-    for q in range(n):
-        acc = s[q] + h * _D61 * KS[0, q]
-        acc += h * _D62 * KS[1, q]
-        acc += h * _D63 * KS[2, q]
-        acc += h * _D64 * KS[3, q]
-        ytmp[q] = acc + h * _D65 * KS[4, q]
-    _deriv_plain_at(y6, d6, ytmp, disc, sysa, KS[5], fel)
-    for q in range(n):
-        acc = s[q] + h * _DB1 * KS[0, q]
-        acc += h * _DB3 * KS[2, q]
-        acc += h * _DB4 * KS[3, q]
-        acc += h * _DB5 * KS[4, q]
-        acc += h * _DB6 * KS[5, q]
-        ytmp[q] = acc
-        s_out[q] = acc
-        if not math.isfinite(acc):
-            return ERR_NONFINITE
-    _deriv_plain_at(y6, d6, ytmp, disc, sysa, KS[6], fel)
-    for q in range(n):
-        acc = h * _DE1 * KS[0, q]
-        acc += h * _DE3 * KS[2, q]
-        acc += h * _DE4 * KS[3, q]
-        acc += h * _DE5 * KS[4, q]
-        acc += h * _DE6 * KS[5, q]
-        err_w[q] = acc + h * _DE7 * KS[6, q]
-    return 0
-
-
-@njit(cache=True)
-def _dp5_excitation(t, h, xc, xp, xtab):
-    """(status, y, y' at t + c_i h for i = 2 .. 6) of a DP5 step (c_7 = c_6 = 1: the 7th
-    stage's time is the 6th's): the same calls of ``excite_yyd`` (inlined for the tables of
-    codes 4 and 1), so the same doubles as six lookups from the stages, in one call."""
-    y2, d2, st = excite_yyd_inline(t + _DC2 * h, xc, xp, xtab)
-    if st != 0:
-        return st, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    y3, d3, st = excite_yyd_inline(t + _DC3 * h, xc, xp, xtab)
-    if st != 0:
-        return st, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    y4, d4, st = excite_yyd_inline(t + _DC4 * h, xc, xp, xtab)
-    if st != 0:
-        return st, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    y5, d5, st = excite_yyd_inline(t + _DC5 * h, xc, xp, xtab)
-    if st != 0:
-        return st, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    y6, d6, st = excite_yyd_inline(t + _DC6 * h, xc, xp, xtab)
-    return st, y2, d2, y3, d3, y4, d4, y5, d5, y6, d6
-
-
-@njit(cache=True)
-def _dp5_step_tableau_free(t, h, s, P, dvm, disc, sysa, xc, xp, xtab, s_out, KS, KP, ytmp,
-                           fel, err_w):
-    """DP5 without variational equations by the stages calling ``deriv`` (with a custom
-    force, whose hook ``deriv`` calls), as the unrolled step did before: KS[0] holds f0."""
-    n = s.shape[0]
     for q in range(n):
         ytmp[q] = s[q] + h * _D21 * KS[0, q]
     st = deriv_plain(t + _DC2 * h, ytmp, P, dvm, disc, sysa, xc, xp, xtab, KS[1], KP[1], fel)

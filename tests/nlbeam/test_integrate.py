@@ -393,10 +393,10 @@ def test_the_inlined_variational_step_is_the_tableau_step_bit_for_bit():
 
 
 def test_the_unrolled_dp5_step_is_the_tableau_step_bit_for_bit():
-    # the plain DP5 step (stochastic.simulate's default) is unrolled, its excitation at the
-    # stage times looked up in one call (steps._dp5_excitation); it must give the tableau
-    # loops' new state and error vector exactly, on every excitation kind, a quintic
-    # coefficient table (a noise block) included, or every adaptive result would change
+    # the plain DP5 step (stochastic.simulate's default) is unrolled with the field inlined
+    # (deriv_plain); it must give the tableau loops' new state and error vector exactly, on
+    # every excitation kind, a quintic coefficient table (a noise block) included, or every
+    # adaptive result would change
     from nlbeam._kernels import steps
 
     rng = np.random.default_rng(3)
