@@ -75,3 +75,26 @@ if "--tables" in sys.argv:
     print(f"  one block ({tb - ta:.3g} s, {n} steps): " + ", ".join(
         f"code {c} {1e3 * v:.2f} ms ({1e9 * v / n:.0f} ns/step)" for c, v in sorted(best.items()))
         + f"; the same trajectory: {np.array_equal(trs[3].x, trs[4].x)}", flush=True)
+if "--taylor" in sys.argv:
+    import numpy as np
+    from stochastic import _kernels
+
+    calls = []
+    real = _kernels.taylor_nodes
+
+    def spy(D, T, scale, out):
+        calls.append((D.copy(), T.copy(), scale.copy(), out.shape))
+        return real(D, T, scale, out)
+
+    _kernels.taylor_nodes = spy
+    st.BandLimitedNoise((0.0, 200.0), rms=1e-4, seed=1).block(0)
+    _kernels.taylor_nodes = real
+    D, T, scale, shape = calls[-1]
+    out = np.empty(shape)
+    best = np.inf
+    for _ in range(30):
+        t = time.process_time()
+        real(D, T, scale, out)
+        best = min(best, time.process_time() - t)
+    print(f"  taylor_nodes of one block ({D.shape[0]} coarse nodes, order {T.shape[0] - 1}, "
+          f"R {T.shape[1]}, {shape[0]} table nodes): {1e3 * best:.3f} ms", flush=True)
