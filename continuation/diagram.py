@@ -1110,7 +1110,9 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
     pool = Pool(workers, scheduler)
     _kernels_before_workers(model, pool, stability)
     early = None
-    if not pool.serial and not (isinstance(accuracy, str) and accuracy == "off"):
+    if not (isinstance(accuracy, str) and accuracy == "off"):
+        # (serial too: a branch's estimates right after its trace find its level-0 flows
+        # still kept, continuation._flowcache)
         from .accuracy import Early
 
         early = Early(pool, model, integrator, "frequency", accuracy, segments)

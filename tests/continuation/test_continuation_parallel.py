@@ -74,3 +74,16 @@ def test_dask_cluster_gives_the_serial_diagram():
 def test_bad_workers_is_a_clear_error():
     with pytest.raises(ValueError, match="^workers"):
         C.frequency_response(nlbeam.BeamImpact.paper(), A, (15.0, 17.0), workers=0)
+
+
+def test_serial_estimates_during_the_trace_equal_estimates_afterwards():
+    # the serial run estimates each branch right after its trace (its level-0 flows still
+    # kept, continuation._flowcache): the numbers of estimate_diagram on the finished diagram
+    from continuation.accuracy import estimate_diagram
+
+    during, _ = _diagram((15.0, 19.0), (1, 2), 5)
+    after, _ = _diagram((15.0, 19.0), (1, 2), 5, accuracy="off")
+    estimate_diagram(after, nlbeam.BeamImpact.paper(), C.Integrator())
+    assert all(b.error_sampled.any() for b in during.branches)
+    assert any(np.isfinite(bf.error) for bf in during.bifurcations)
+    _same(during, after)
