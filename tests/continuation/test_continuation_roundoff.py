@@ -382,3 +382,80 @@ def test_same_orbit_test_recognises_the_orbit_and_rejects_another():
     u, ev, res, it = prob.solve(u, 40.0)
     assert _same_orbit_test(prob, u, 40.0)(br, 0, 0.5)
     assert not _same_orbit_test(prob, u * 1.05, 40.0)(br, 0, 0.5)
+
+
+def test_clusters_within_their_stated_errors_are_one_event():
+    """diagram._merged_clusters: grazing points of one branch whose error intervals (value +-
+    max(bracket, estimated error, 1e-5 of f)) overlap one after the other are one event, kept
+    at the member nearest the cluster's middle with a tolerance covering every member; which
+    members a run resolved does not change the event or its interval."""
+    from continuation.diagram import Bifurcation, _merged_clusters, _stated_error
+
+    def g(f, tol=1e-6, err=float("nan"), branch=3, kind="grazing", note=""):
+        b = Bifurcation(kind, f, f, 1e-4, 2, branch, tol, None, note=note)
+        b.error = err
+        return b
+    f0 = 67.5
+    r = 1e-5 * f0  # the resolution: each stated error at least this
+    # 67.4999-67.5037 Hz: changes 1.3e-3 Hz apart (more than one resolution, less than two)
+    fs = [f0, f0 + 1.3e-3, f0 + 2.5e-3, f0 + 3.7e-3]
+    out = _merged_clusters([g(f) for f in fs])
+    assert len(out) == 1 and out[0].note == "4 changes of the number of impacts within the bracket"
+    assert out[0].value in (fs[1], fs[2])  # the member nearest the middle
+    assert out[0].value - _stated_error(out[0]) <= fs[0] and out[0].value + out[0].tolerance \
+        >= fs[-1]
+    # any subset a perturbed run may have resolved: one event, its interval overlapping the
+    # reference's, both covering all the changes they saw
+    # (one that missed a change bridging two others sees two events: [fs[0], fs[2]])
+    assert len(_merged_clusters([g(fs[0]), g(fs[2])])) == 2
+    for sub in ([fs[0], fs[1]], [fs[1]], [fs[0], fs[1], fs[2]], [fs[2], fs[3]]):
+        o = _merged_clusters([g(f) for f in sub])
+        assert len(o) == 1
+        assert abs(o[0].value - out[0].value) <= _stated_error(o[0]) + _stated_error(out[0])
+    # farther apart than the two errors: two events; an estimated error larger than the
+    # resolution widens the interval
+    assert len(_merged_clusters([g(f0), g(f0 + 2.1 * r)])) == 2
+    assert len(_merged_clusters([g(f0), g(f0 + 2.1 * r, err=1.2 * r)])) == 1
+    assert len(_merged_clusters([g(f0), g(f0 + 3 * r, tol=2.1 * r)])) == 1  # the bracket
+    # another branch, a smooth bifurcation: never merged
+    assert len(_merged_clusters([g(f0), g(f0 + 1e-4, branch=4)])) == 2
+    assert len(_merged_clusters([g(f0, kind="fold"), g(f0 + 1e-4, kind="fold")])) == 2
+    # jumps of a multiplier at grazing points: counted in the note
+    jump = "at grazing: multiplier jumps from -1.2 to 0.5 (non-smooth)"
+    o = _merged_clusters([g(f0, kind="period-doubling", note=jump),
+                          g(f0 + r, kind="period-doubling", note=jump + " (2 such jumps within "
+                            "the bracket)")])
+    assert len(o) == 1 and o[0].note == jump + " (3 such jumps within the bracket)"
+    assert not o[0].smooth
+    # a chain decided on either side the same: values moved by 1e-13 keep the clusters
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        v = np.sort(f0 + rng.uniform(0, 40 * r, 8))
+        a = len(_merged_clusters([g(f) for f in v]))
+        b = len(_merged_clusters([g(f * (1 + 1e-13)) for f in v]))
+        assert a == b
+
+
+def test_estimate_that_leaves_the_bracket_keeps_the_traced_value():
+    """diagram._kept_in_bracket: a grazing point the error estimate moved out of the tracer's
+    bracket by more than its estimated error keeps its traced value, the distance as error
+    (both runs then list it at the same frequency); one moved within bracket + error, or a
+    smooth bifurcation, keeps the estimate."""
+    from continuation.diagram import Bifurcation, _kept_in_bracket
+
+    def bif(kind, v_est, err, note=""):
+        b = Bifurcation(kind, v_est, v_est, 1e-4, 1, 0, 2.8e-4, None, note=note)
+        b.error = err
+        return b
+    v0 = 6.6478319
+    far = bif("grazing", 6.6496544, 9.8e-4)  # the case measured: 1.8e-3 away, error 9.8e-4
+    near = bif("grazing", v0 + 1e-3, 9.8e-4)  # within 2.8e-4 + 9.8e-4
+    jump = bif("period-doubling", 6.6496544, 9.8e-4, note="at grazing: multiplier jumps")
+    smooth = bif("period-doubling", 6.6496544, 9.8e-4)
+    nan = bif("grazing", v0 + 3e-4, float("nan"))
+    _kept_in_bracket([(b, v0) for b in (far, near, jump, smooth, nan)])
+    assert far.frequency == far.value == v0 and far.error == pytest.approx(6.6496544 - v0)
+    assert jump.value == v0 and jump.error == pytest.approx(6.6496544 - v0)
+    assert near.value == v0 + 1e-3 and near.error == 9.8e-4
+    assert smooth.value == 6.6496544 and smooth.error == 9.8e-4
+    assert nan.value == v0 and nan.error == pytest.approx(3e-4)
