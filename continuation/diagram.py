@@ -619,26 +619,6 @@ def _stated_error(bf):
     return max(e)
 
 
-def _kept_in_bracket(traced):
-    """traced: (Bifurcation, its value as traced) before the error estimates. A grazing point
-    (or a bifurcation reported at one) that the estimate located again outside the tracer's
-    bracket (value +- tolerance) by more than the estimated error found another event (a
-    neighbouring change of the number of impacts) or an estimate that does not hold: it keeps
-    its traced value, with the distance as its error (measured: the paper model's order-1
-    grazing point 6.64783 Hz, bracket 2.8e-4, went to 6.64965 +- 9.8e-4 under parameters x (1 +
-    1e-13) and stayed at 6.64783 +- 1.1e-6 without; which one is round-off's choice)."""
-    for b, v0 in traced:
-        if b.kind != "grazing" and b.smooth:
-            continue
-        d = abs(b.value - v0)
-        err = b.error if np.isfinite(b.error) else 0.0
-        if d > b.tolerance + err:
-            if b.frequency == b.value:  # (a frequency diagram)
-                b.frequency = v0
-            b.value = v0
-            b.error = d
-
-
 def _merged_clusters(bifs):
     """``bifs`` with every cluster of grazing points of one branch whose error intervals
     (value +- ``_stated_error``) overlap, one after the other, made one event; the same for
@@ -1221,9 +1201,7 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
                                                         max_angle, tol, bif_tol, orders),
                                               stability=int(bool(stability))))
         frc.n_points = int(sum(len(b.values) for b in branches))
-        traced = [(b, b.value) for b in bifs]
         _estimate(frc, model, integrator, accuracy, segments, progress, pool, early)
-        _kept_in_bracket(traced)
         frc.bifurcations = _merged_clusters(frc.bifurcations)
         frc.wall_time = time.perf_counter() - t0
         return frc
@@ -1294,9 +1272,7 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
                             settings=_settings(integrator, segments, 0, ds, ds_max, max_angle,
                                                tol, bif_tol, (solution.order,)))
     frc.n_points = len(br.values)
-    traced = [(b, b.value) for b in bifs]
     _estimate(frc, model, integrator, accuracy, segments, None)
-    _kept_in_bracket(traced)
     frc.bifurcations = _merged_clusters(frc.bifurcations)
     frc.wall_time = time.perf_counter() - t0
     return frc

@@ -435,27 +435,3 @@ def test_clusters_within_their_stated_errors_are_one_event():
         b = len(_merged_clusters([g(f * (1 + 1e-13)) for f in v]))
         assert a == b
 
-
-def test_estimate_that_leaves_the_bracket_keeps_the_traced_value():
-    """diagram._kept_in_bracket: a grazing point the error estimate moved out of the tracer's
-    bracket by more than its estimated error keeps its traced value, the distance as error
-    (both runs then list it at the same frequency); one moved within bracket + error, or a
-    smooth bifurcation, keeps the estimate."""
-    from continuation.diagram import Bifurcation, _kept_in_bracket
-
-    def bif(kind, v_est, err, note=""):
-        b = Bifurcation(kind, v_est, v_est, 1e-4, 1, 0, 2.8e-4, None, note=note)
-        b.error = err
-        return b
-    v0 = 6.6478319
-    far = bif("grazing", 6.6496544, 9.8e-4)  # the case measured: 1.8e-3 away, error 9.8e-4
-    near = bif("grazing", v0 + 1e-3, 9.8e-4)  # within 2.8e-4 + 9.8e-4
-    jump = bif("period-doubling", 6.6496544, 9.8e-4, note="at grazing: multiplier jumps")
-    smooth = bif("period-doubling", 6.6496544, 9.8e-4)
-    nan = bif("grazing", v0 + 3e-4, float("nan"))
-    _kept_in_bracket([(b, v0) for b in (far, near, jump, smooth, nan)])
-    assert far.frequency == far.value == v0 and far.error == pytest.approx(6.6496544 - v0)
-    assert jump.value == v0 and jump.error == pytest.approx(6.6496544 - v0)
-    assert near.value == v0 + 1e-3 and near.error == 9.8e-4
-    assert smooth.value == 6.6496544 and smooth.error == 9.8e-4
-    assert nan.value == v0 and nan.error == pytest.approx(3e-4)
