@@ -312,7 +312,7 @@ def _fold_turning_point(prob, u0, p0, deltas=(1e-4, 1e-5), tol=1e-10, hint=None)
     ev = prob.evaluate(u0, p0, jac=True, jac_p=True)
     jp = ev.Jp * wp / w
     J = np.hstack([ev.Ju * w[None, :] / w[:, None], jp[:, None]])
-    t = np.linalg.svd(J)[2][-1]  # the tangent (null vector of [dR/du | dR/dp], scaled)
+    t = la.null_vector(J)  # the tangent (null vector of [dR/du | dR/dp], scaled)
     err = None
     if prob.variational:
         try:

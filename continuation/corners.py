@@ -430,7 +430,11 @@ class Retrace:
         d = B - A
         L = la.norm(d)
         safe = np.where(L > 0, L, 1.0)
-        lam = np.einsum("ij,ij->i", x - A, d) / safe ** 2
+        xa = x - A
+        dots = xa[:, 0] * d[:, 0]  # row-wise dot products summed in column order (fixed)
+        for j in range(1, d.shape[1]):
+            dots = dots + xa[:, j] * d[:, j]
+        lam = dots / safe ** 2
         dist = la.norm(A + np.clip(lam, 0, 1)[:, None] * d - x)
         cos = la.matmul(d, dn) / (safe * Ln)
         near = ((L > 0) & (lam >= 0) & (lam <= 1) & (dist <= self.tol * np.maximum(L, Ln))

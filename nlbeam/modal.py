@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import _linalg as la
 from ._validate import choice, in_range, integer, positive, real_array
 from .systems import Contact, System, _model_protocol
 from .vocabulary import BOUNDARY_CONDITIONS
@@ -155,18 +156,20 @@ class ModalBeam:
         c = 2.0 * z * np.sqrt(k * m)
         gam = self.participation_factors
         ph = self.shape_at(self.stop_position)
-        s = float(ph @ gam)
+        s = la.dot(ph, gam)
         # z = T xi with xi = [x, z_2..z_N], x = phi(a) . z
         T = np.eye(N)
         T[0, 0] = 1.0 / ph[0]
         T[0, 1:] = -ph[1:] / ph[0]
         Md, Kd, Cd = np.diag(np.full(N, m)), np.diag(k), np.diag(c)
-        M = T.T @ Md @ T
-        K = T.T @ Kd @ T
-        C = T.T @ Cd @ T
+        Tt = np.ascontiguousarray(T.T)  # products in a fixed order (la): the same on every CPU
+        M = la.matmul(la.matmul(Tt, Md), T)
+        K = la.matmul(la.matmul(Tt, Kd), T)
+        C = la.matmul(la.matmul(Tt, Cd), T)
         stop = dataclasses.replace(stop, base_weight=s)
         sysm = System(0.5 * (M + M.T), 0.5 * (C + C.T), 0.5 * (K + K.T), (stop,), "base",
-                      y_load=T.T @ (Kd @ gam), yd_load=T.T @ (Cd @ gam), output_dof=0,
+                      y_load=la.matmul(Tt, la.matmul(Kd, gam)),
+                      yd_load=la.matmul(Tt, la.matmul(Cd, gam)), output_dof=0,
                       name="ModalBeam")
         object.__setattr__(self, "system", sysm)
 
@@ -222,12 +225,12 @@ class ModalBeam:
         xg, wg = _QUAD
         xi = 0.5 * (xg + 1.0)
         ph = self.shapes(xi * float(self.length))
-        return (0.5 * wg) @ ph
+        return la.matmul(0.5 * wg, ph)
 
     @property
     def base_weight(self) -> float:
         """s_N = sum_i phi_i(a/L) Gamma_i: delta = x - s_N y - gap."""
-        return float(self.shape_at(self.stop_position) @ self.participation_factors)
+        return la.dot(self.shape_at(self.stop_position), self.participation_factors)
 
     @property
     def contact_mass(self) -> float:

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _kernels as _k
+from . import _linalg as la
 from ._validate import choice, flag, in_range, positive
 from .vocabulary import METHODS as METHOD_NAMES
 
@@ -59,6 +60,14 @@ ADAPTIVE_SAMPLES_PER_PERIOD = 200
 VMINUS_FLOOR = _k.VMINUS_FLOOR  # m/s: delta'_minus of a start or onset at zero rate
 _F_MAX = weakref.WeakKeyDictionary()  # System -> highest natural frequency (Hz)
 _CUBIC = weakref.WeakKeyDictionary()  # System -> [(k3, w)] of its hardening cubic springs
+
+
+def _dot(a, b):
+    """a . b summed in index order (numpy's @ of vectors is BLAS's ddot: CPU-dependent bits)."""
+    s = 0.0
+    for i in range(len(a)):
+        s = s + float(a[i]) * float(b[i])
+    return s
 
 
 def highest_natural_frequency(model):
@@ -203,8 +212,8 @@ class Solver:
         N = w.shape[1]
         disc = np.zeros((len(gap), 2))
         for e in elements:
-            d = w[e] @ state[:N] + wy[e] * y - gap[e]
-            dd = w[e] @ state[N:] + wy[e] * yd
+            d = _dot(w[e], state[:N]) + wy[e] * y - gap[e]
+            dd = _dot(w[e], state[N:]) + wy[e] * yd
             if d > 0:
                 disc[e, 0] = 1.0
                 disc[e, 1] = dd if dd > VMINUS_FLOOR else VMINUS_FLOOR
@@ -255,9 +264,9 @@ def stiffened_frequency(model, xmax):
         return None
     K = np.array(sysm.K, dtype=float)
     for k3, w in cubic:
-        d = float(np.abs(w) @ np.abs(xmax))
+        d = _dot(np.abs(w), np.abs(np.asarray(xmax, dtype=float)))
         K += 3.0 * k3 * d * d * np.outer(w, w)
-    lam = np.linalg.eigvals(np.linalg.solve(sysm.M, K))
+    lam = la.eigvals(la.solve(sysm.M, K))
     return float(np.sqrt(np.abs(lam.real)).max() / (2 * np.pi))
 
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _kernels as _k
+from . import _linalg as la
 from ._validate import (ArgumentTypeError, choice, finite, flag, in_range, integer,
                         nonnegative, positive, real, real_array)
 from .vocabulary import CONTACT_LAWS
@@ -178,6 +179,15 @@ class CubicSpring:
         return _k.CUBIC, w, wy, 0.0, [float(self.k3), 0.0, 0.0, 0.0]
 
 
+def _rows_dot(x, w):
+    """x (..., N) against each row of w (ne, N): (..., ne), summed over N in index order by
+    elementwise products (numpy's @ goes through BLAS, whose last bits differ between CPUs)."""
+    out = x[..., :1] * w[:, 0]
+    for j in range(1, w.shape[1]):
+        out = out + x[..., j:j + 1] * w[:, j]
+    return out
+
+
 def _load(name, value):
     return real_array(name, value, finite_values=False)
 
@@ -231,8 +241,8 @@ class System:
             raise ArgumentTypeError(f"name: must be a string, got {self.name!r}")
         ones = np.ones(N)
         if self.excitation_kind == "base":
-            yl = K @ ones if self.y_load is None else _load("y_load", self.y_load)
-            ydl = C @ ones if self.yd_load is None else _load("yd_load", self.yd_load)
+            yl = la.matmul(K, ones) if self.y_load is None else _load("y_load", self.y_load)
+            ydl = la.matmul(C, ones) if self.yd_load is None else _load("yd_load", self.yd_load)
         else:
             yl = np.eye(N)[0] if self.y_load is None else _load("y_load", self.y_load)
             ydl = np.zeros(N) if self.yd_load is None else _load("yd_load", self.yd_load)
@@ -253,7 +263,7 @@ class System:
             ewy[i] = wy
             egap[i] = gap
             epar[i] = par
-        Minv = np.linalg.inv(M)
+        Minv = la.inv(M)  # fixed order: the kernel arrays are the same on every CPU
         out = self.output_dof
         if out is None:
             out = 0
@@ -280,9 +290,9 @@ class System:
         if not np.all(np.isfinite(upar)):
             raise ValueError("custom_params: must be finite")
         arrays = _k.SystemArrays(
-            MinvK=np.ascontiguousarray(Minv @ K), MinvC=np.ascontiguousarray(Minv @ C),
-            mek=Minv @ yl, mec=Minv @ ydl, etype=etype, ew=ew, ewy=ewy, egap=egap, epar=epar,
-            mw=np.ascontiguousarray(ew @ Minv.T), upar=upar, uf=np.zeros((4, N)),
+            MinvK=la.matmul(Minv, K), MinvC=la.matmul(Minv, C), mek=la.matmul(Minv, yl),
+            mec=la.matmul(Minv, ydl), etype=etype, ew=ew, ewy=ewy, egap=egap, epar=epar,
+            mw=la.matmul(ew, np.ascontiguousarray(Minv.T)), upar=upar, uf=np.zeros((4, N)),
             Minv=np.ascontiguousarray(Minv))
         object.__setattr__(self, "_arrays", arrays)
 
@@ -317,7 +327,7 @@ class System:
 
     def natural_frequencies(self):
         """Undamped natural frequencies (Hz) of the linear structure without the elements."""
-        lam = np.linalg.eigvals(np.linalg.solve(self.M, self.K))
+        lam = la.eigvals(la.solve(self.M, self.K))
         return np.sort(np.sqrt(np.abs(lam.real))) / (2 * np.pi)
 
     def has_events(self) -> bool:
@@ -334,8 +344,9 @@ class System:
         state = np.asarray(state, dtype=float)
         N = self.n_dof
         _, ew, ewy, egap = self.element_geometry()
-        d = state[..., :N] @ ew.T + np.multiply.outer(np.asarray(y, dtype=float), ewy) - egap
-        dd = state[..., N:] @ ew.T + np.multiply.outer(np.asarray(yd, dtype=float), ewy)
+        x, v = _rows_dot(state[..., :N], ew), _rows_dot(state[..., N:], ew)
+        d = x + np.multiply.outer(np.asarray(y, dtype=float), ewy) - egap
+        dd = v + np.multiply.outer(np.asarray(yd, dtype=float), ewy)
         return d, dd
 
     def parameters(self) -> dict:

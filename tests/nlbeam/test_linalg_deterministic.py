@@ -11,7 +11,10 @@ import textwrap
 import numpy as np
 import pytest
 
+import nlbeam
 from nlbeam import _linalg as la
+from nlbeam.modal import ModalBeam
+from nlbeam.systems import Contact, System
 
 
 def test_exact_answers():
@@ -173,3 +176,79 @@ def test_resonance_peak_of_three_points_is_exact():
     s_star = -cx[1] / (2 * cx[0])
     assert np.allclose(_vertex(f, x), (np.polyval(cf, s_star), np.polyval(cx, s_star)),
                        rtol=1e-13)
+
+
+# --- the kernel arrays of a System and the modal beam's matrices (nlbeam.systems, nlbeam.modal)
+# come from this module too: the same bits under two core types (with numpy's BLAS they differed
+# for N > 1, so a multi-DOF model's diagram was traced with other matrices on another CPU);
+# exact where the arithmetic is exact, within round-off of numpy elsewhere.
+
+FIELDS = ("Minv", "MinvK", "MinvC", "mek", "mec", "mw")
+
+
+def _two_dof():
+    return System([[1.0, 0.1], [0.1, 2.0]], [[0.3, -0.1], [-0.1, 0.2]],
+                  [[40.0, -10.0], [-10.0, 30.0]], (Contact(1, "hertz", 1e6),), "base")
+
+
+def test_one_dof_arrays_are_the_quotients():
+    """N = 1: M^-1 = 1/m and each product one multiplication (what numpy's LAPACK / BLAS gave
+    too: the paper model's kernels are unchanged bit for bit)."""
+    p = nlbeam.BeamImpact.paper()
+    a = p.system.kernel_arrays()
+    inv = 1.0 / p.m
+    assert a.Minv[0, 0] == inv and a.MinvK[0, 0] == inv * p.k and a.MinvC[0, 0] == inv * p.b
+    assert a.mek[0] == inv * p.k and a.mec[0] == inv * p.b and a.mw[0, 0] == inv
+    assert p.natural_frequencies()[0] == pytest.approx(p.natural_frequency, rel=1e-15)
+
+
+def test_exact_where_the_arithmetic_is_exact():
+    """Masses and stiffnesses in powers of two: every product and quotient is exact."""
+    s = System([[2.0, 0.0], [0.0, 4.0]], [[0.5, -0.25], [-0.25, 1.0]], [[8.0, -2.0], [-2.0, 16.0]],
+               (Contact(1, "hertz", 1e6),), "base")
+    a = s.kernel_arrays()
+    assert np.array_equal(a.Minv, [[0.5, 0.0], [0.0, 0.25]])
+    assert np.array_equal(a.MinvK, [[4.0, -1.0], [-0.5, 4.0]])
+    assert np.array_equal(a.mek, [3.0, 3.5]) and np.array_equal(a.mec, [0.125, 0.1875])
+    assert np.array_equal(a.mw, [[0.0, 0.25]])
+    d, dd = s.penetration(np.array([[1.0, 3.0, 0.5, -2.0]]), y=1.0, yd=0.5)
+    assert d.shape == (1, 1) and d[0, 0] == 2.0 and dd[0, 0] == -2.5  # x1 - y, v1 - y'
+
+
+@pytest.mark.parametrize("make", [_two_dof, lambda: ModalBeam.calibrated(37.75e-3, 736.3,
+                                                                          n_modes=4)])
+def test_agree_with_numpy_within_round_off(make):
+    m = make()
+    s, a = m.system, m.system.kernel_arrays()
+    Minv = np.linalg.inv(s.M)
+    ref = {"Minv": Minv, "MinvK": Minv @ s.K, "MinvC": Minv @ s.C, "mek": Minv @ s.y_load,
+           "mec": Minv @ s.yd_load, "mw": s.element_geometry()[1] @ Minv.T}
+    for f in FIELDS:
+        scale = np.max(np.abs(ref[f]))
+        assert np.max(np.abs(getattr(a, f) - ref[f])) <= 1e-13 * scale, f
+    w = np.sqrt(np.abs(np.linalg.eigvals(np.linalg.solve(s.M, s.K)).real)) / (2 * np.pi)
+    assert np.allclose(m.natural_frequencies(), np.sort(w), rtol=1e-12)
+
+
+_ARRAYS = """
+    import numpy as np
+    from nlbeam.modal import ModalBeam
+    from nlbeam.systems import Contact, System
+    ms = [System([[1.0, 0.1], [0.1, 2.0]], [[0.3, -0.1], [-0.1, 0.2]],
+                 [[40.0, -10.0], [-10.0, 30.0]], (Contact(1, "hertz", 1e6),), "base")]
+    ms += [ModalBeam.calibrated(37.75e-3, 736.3, n_modes=n) for n in (2, 4)]
+    out = []
+    for m in ms:
+        a = m.system.kernel_arrays()
+        out += [np.ravel(getattr(a, f)) for f in ("Minv", "MinvK", "MinvC", "mek", "mec", "mw")]
+        out += [m.system.M.ravel(), m.system.K.ravel(), m.system.C.ravel(),
+                m.system.y_load, m.natural_frequencies()]
+    print(np.concatenate(out).tobytes().hex())
+"""
+
+
+@needs_avx2
+def test_kernel_arrays_are_the_same_under_two_openblas_core_types():
+    """A 2-DOF system and the 2- and 4-mode beams (with numpy's BLAS, MinvC, mec, and the
+    modal beams' MinvK, mek, y_load differed in their last bits between these two)."""
+    assert _run("Prescott", _ARRAYS) == _run("Haswell", _ARRAYS)
