@@ -15,7 +15,8 @@ K = 2.1e8 N/m^1.5, e = 0.5), A = 0.1 mm, 5-150 Hz, orders 1 and 2, n_grid 20. Un
   at dt_scale 1, 2, 4, with the steps taken and the impacts per period.
 - ``diagram``: the whole diagram with a progress line per branch (CPU seconds of this process
   in brackets); at the end the CPU per stage (brute-force grid, branches, error estimates),
-  the CPU of the branches by how they ended, the flows the tracer asked for, and the
+  the CPU of the branches by how they ended, the flows the tracer asked for (per half-branch
+  end reason, with those spent after the half's last point: what giving up cost), and the
   diagram's warnings. --accuracy: as the scene says (figures/modal_beam.toml: "off", no error
   estimates; "default" for the estimates as well).
 
@@ -110,6 +111,16 @@ def diagram(out=None, accuracy="off"):
         tracers.append(self)
 
     Tracer.__init__ = counting_init
+    trace, halves = Tracer.trace, {}
+
+    def counting_trace(self, *a, **k):  # (flows per half-branch, and after its last point)
+        n0 = self.n_evaluations
+        pts, located, reason = trace(self, *a, **k)
+        n, fl, end = halves.get(reason, (0, 0, 0))
+        halves[reason] = (n + 1, fl + self.n_evaluations - n0, end + self.end_evaluations)
+        return pts, located, reason
+
+    Tracer.trace = counting_trace
     t0 = time.process_time()
     log = []
 
@@ -124,7 +135,7 @@ def diagram(out=None, accuracy="off"):
                                               n_grid=N_GRID, progress=progress,
                                               accuracy=accuracy)
     total = time.process_time() - t0
-    Tracer.__init__ = init
+    Tracer.__init__, Tracer.trace = init, trace
     stamps = [(float(re.match(r"\[\s*([\d.]+)\]", s).group(1)), s) for s in log]
     grid = next(t for t, s in stamps if "brute-force grid" in s)
     last_branch = max(t for t, s in stamps if "] branch " in s)
@@ -143,6 +154,9 @@ def diagram(out=None, accuracy="off"):
           f"branches {last_branch - grid:.1f} s, error estimates {total - last_branch:.1f} s")
     for key, (n, c) in by_end.items():
         print(f"  {n} branches {key}: {c:.1f} s")
+    for reason, (n, fl, end) in sorted(halves.items(), key=lambda kv: -kv[1][1]):
+        print(f"  {n} half-branches ending '{reason}': {fl} flows, {end} of them after the "
+              "last point")
     print(f"{len(frc.branches)} branches, {frc.n_points} points, {len(frc.bifurcations)} "
           f"bifurcations; the tracer asked for {sum(t.n_evaluations for t in tracers)} flows")
     ends = [e for b in frc.branches for e, v in zip(b.ends, (b.values[0], b.values[-1]))
