@@ -162,6 +162,8 @@ class Tracer:
     with them costs 3.2 times one without at N = 1, 5.8 at N = 4), except one whose residual,
     at the last ratio of residuals, is expected below tol; an accepted iterate without them
     is evaluated again with them (the multipliers are always those of the accepted point).
+    A lazy iteration that converges steadily but linearly below noise_tol gets up to max_iter
+    more iterations where, at its last ratios, tol lies within them.
     lazy_var None (default): for systems of more than one DOF (more than two states);
     True / False: always / never. (On the 1-DOF paper diagram,
     lazy_var=True took 25.5 against 33.3 s CPU but converged to other points within tol,
