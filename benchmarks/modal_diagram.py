@@ -6,6 +6,7 @@ K = 2.1e8 N/m^1.5, e = 0.5), A = 0.1 mm, 5-150 Hz, orders 1 and 2, n_grid 20. Un
     python benchmarks/modal_diagram.py steps [--freqs 5.5,8,12.5,27,40,48] [--scales 1,2,4,8]
     python benchmarks/modal_diagram.py flows
     python benchmarks/modal_diagram.py diagram [--out modal4.h5] [--accuracy off]
+    python benchmarks/modal_diagram.py branch [--freq 5.9] [--debug]
 
 - ``steps``: periodic orbits (order 1, found by integration to the steady state) solved at the
   default free-flight step times dt_scale (steps_per_contact 32 throughout) against the orbit at
@@ -13,9 +14,12 @@ K = 2.1e8 N/m^1.5, e = 0.5), A = 0.1 mm, 5-150 Hz, orders 1 and 2, n_grid 20. Un
   how much the contact steps alone change the reference (steps_per_contact 128).
 - ``flows``: CPU of one period's flow with and without the variational equations (monodromy)
   at dt_scale 1, 2, 4, with the steps taken and the impacts per period.
+- ``branch``: the order-1 branch through the steady state at --freq, traced alone both
+  ways (with --debug: every corrector iterate and step).
 - ``diagram``: the whole diagram with a progress line per branch (CPU seconds of this process
   in brackets); at the end the CPU per stage (brute-force grid, branches, error estimates),
-  the CPU of the branches by how they ended, the flows the tracer asked for, and the
+  the CPU of the branches by how they ended, the flows the tracer asked for (per half-branch
+  end reason, with those spent after the half's last point: what giving up cost), and the
   diagram's warnings. --accuracy: as the scene says (figures/modal_beam.toml: "off", no error
   estimates; "default" for the estimates as well).
 
@@ -110,6 +114,16 @@ def diagram(out=None, accuracy="off"):
         tracers.append(self)
 
     Tracer.__init__ = counting_init
+    trace, halves = Tracer.trace, {}
+
+    def counting_trace(self, *a, **k):  # (flows per half-branch, and after its last point)
+        n0 = self.n_evaluations
+        pts, located, reason = trace(self, *a, **k)
+        n, fl, end = halves.get(reason, (0, 0, 0))
+        halves[reason] = (n + 1, fl + self.n_evaluations - n0, end + self.end_evaluations)
+        return pts, located, reason
+
+    Tracer.trace = counting_trace
     t0 = time.process_time()
     log = []
 
@@ -124,7 +138,7 @@ def diagram(out=None, accuracy="off"):
                                               n_grid=N_GRID, progress=progress,
                                               accuracy=accuracy)
     total = time.process_time() - t0
-    Tracer.__init__ = init
+    Tracer.__init__, Tracer.trace = init, trace
     stamps = [(float(re.match(r"\[\s*([\d.]+)\]", s).group(1)), s) for s in log]
     grid = next(t for t, s in stamps if "brute-force grid" in s)
     last_branch = max(t for t, s in stamps if "] branch " in s)
@@ -143,6 +157,9 @@ def diagram(out=None, accuracy="off"):
           f"branches {last_branch - grid:.1f} s, error estimates {total - last_branch:.1f} s")
     for key, (n, c) in by_end.items():
         print(f"  {n} branches {key}: {c:.1f} s")
+    for reason, (n, fl, end) in sorted(halves.items(), key=lambda kv: -kv[1][1]):
+        print(f"  {n} half-branches ending '{reason}': {fl} flows, {end} of them after the "
+              "last point")
     print(f"{len(frc.branches)} branches, {frc.n_points} points, {len(frc.bifurcations)} "
           f"bifurcations; the tracer asked for {sum(t.n_evaluations for t in tracers)} flows")
     ends = [e for b in frc.branches for e, v in zip(b.ends, (b.values[0], b.values[-1]))
@@ -156,9 +173,38 @@ def diagram(out=None, accuracy="off"):
         frc.save(out)
 
 
+def branch(f, debug=False):
+    """The order-1 branch through the steady state at f (Hz), traced alone both ways as the
+    diagram's gap seeds are: points, flows (after each half's last point), end reasons, CPU."""
+    from continuation import diagram as D
+    from continuation.pathfollow import Tracer
+
+    m, integ = model(), continuation.Integrator()
+    tr = Tracer(p_min=F_RANGE[0], p_max=F_RANGE[1], ds=0.02, ds_max=0.5, max_angle=0.2,
+                max_points=1000, tol=1e-10, bif_tol=1e-8)  # (frequency_response's defaults)
+    tr.debug = debug
+    s0 = D.steady_state(m, AMPLITUDE, f, integrator=integ)
+    t0 = time.process_time()
+    for (_, _, prob, u, p, _) in D._polished_starts(m, AMPLITUDE, None, "frequency", (1,),
+                                                   [(f, 1, s0, False)], 1, integ, True,
+                                                   tr.tol, []):
+        ends, prior = [], None
+        for direction in (1, -1):  # (as diagram._both_ways: the second half knows the first)
+            pts, _, reason = tr.trace(prob, u, p, direction=direction, prior=prior)
+            ends.append(f"{pts[-1].p:.6f} Hz {reason} ({len(pts)} points, "
+                        f"{tr.end_evaluations} flows after the last)")
+            if reason.startswith("closed"):
+                break
+            prior = tr.retrace.export()
+        print(f"from {p:.6g} Hz: {'; '.join(ends)}; {tr.n_evaluations} flows, "
+              f"{time.process_time() - t0:.1f} s CPU")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("what", choices=("steps", "flows", "diagram"))
+    ap.add_argument("what", choices=("steps", "flows", "diagram", "branch"))
+    ap.add_argument("--freq", type=float, default=5.9, help="branch: its start (Hz)")
+    ap.add_argument("--debug", action="store_true", help="branch: Tracer.debug")
     ap.add_argument("--freqs", default="5.5,8,12.5,27,40,48")
     ap.add_argument("--scales", default="1,2,4,8")
     ap.add_argument("--out", default=None)
@@ -170,6 +216,8 @@ def main():
         steps([float(x) for x in a.freqs.split(",")], [float(x) for x in a.scales.split(",")])
     elif a.what == "flows":
         flows()
+    elif a.what == "branch":
+        branch(a.freq, a.debug)
     else:
         diagram(a.out, a.accuracy)
 
