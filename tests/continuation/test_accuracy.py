@@ -347,7 +347,7 @@ def test_fold_by_the_slope_is_the_turning_point_of_p_alone():
 ])
 def test_diagram_multipliers_meet_the_default_target(name, model, amplitude, f_range, f0):
     """At the defaults the diagram reports each point's multipliers from its orbit carried to
-    the step halved, or quartered where that misses 1e-5 (accuracy.branch_errors): against
+    the step halved, or finer while that misses 1e-5 (accuracy.branch_errors): against
     the converged values (FINE) they are within their stated error at every checked point,
     the stated error is not vacuous, and 1e-5 (issue 13 item 5) is met at most points; the
     level-0 multipliers of the same points miss it far more often (the contact steps' error:
