@@ -14,14 +14,17 @@ cause: the discretization of the flow, and the variational monodromy's differenc
 derivative of the fixed-step map.
 
 Branch points of a diagram (``branch_errors``): every point is carried to level 1 by one Newton
-step of the level-1 map (``refined_point``), on to level 2 where the multipliers changed by
-more than the target (3 with more than 6 digits asked for), and the diagram reports the finest
+step of the level-1 map (``refined_point``), on to levels 2 and 3 while the stated error
+exceeds the target (4 with more than 6 digits asked for), and the diagram reports the finest
 multipliers (and stability flags), stated error their last change (twice the larger change
-where the changes do not fall 4-fold); xmax stays the level-0 value (error SAFETY times its
-change). The multipliers' error at the defaults comes from the contact steps (32 per contact;
-halving dt alone leaves it, benchmarks/multiplier_error_sources.py); on the paper diagram the
-true error at every 15th point falls from median 1.4e-4 (73 of 102 above 1e-5) to 6.6e-7 (25
-above, in the chattering stretches 9.1-9.9 Hz and next to corners at 67.6 and 110.7-111 Hz).
+where the changes do not fall 4-fold), or from level 2 on, where the ratio of the last two
+changes shows the method's order 4 (``RICHARDSON_RATIOS``) and the impacts per period stay,
+the Richardson extrapolant, stated error twice its correction (``carried_estimate``); xmax
+stays the level-0 value (error SAFETY times its change). The multipliers' error at the
+defaults comes from the contact steps (32 per contact; halving dt alone leaves it,
+benchmarks/multiplier_error_sources.py); on the paper diagram the true error at every 10th
+point (181, against level 5) is median 1.7e-7, 26 above 1e-5 (levels 0-1: 6.7e-7, 61; in
+the chattering stretches 8.3-9.9 Hz and next to corners at 66-67.7 and 110.7-111 Hz).
 Every point is estimated, none interpolated (except where no refined orbit is found).
 
 Bifurcations (``bifurcation_levels``) are located again at levels 1, 2, ...: period doublings
@@ -602,7 +605,8 @@ def corner_indices(branch, bifurcations, index):
     return sorted(out)
 
 
-def refined_point(prob, u, p, mu0, *, level=1, jac=None, newton_limit=1e-3):
+def refined_point(prob, u, p, mu0, *, level=1, jac=None, newton_limit=1e-3,
+                  with_impacts=False):
     """The orbit u of prob at p (converged at prob's integrator or at level - 1 of it; mu0:
     its multipliers, None without) carried to ``level`` by one Newton step of that level's map
     from u, with the Jacobian ``jac`` of the coarser level at u if given (one evaluation
@@ -610,7 +614,8 @@ def refined_point(prob, u, p, mu0, *, level=1, jac=None, newton_limit=1e-3):
     error, ~1e-6 of its scale on the paper model, and the multipliers on the unmoved orbit are
     off by as much as their change itself; after the step they equal a fully converged solve
     to 2 digits (measured). Returns (xmax, multipliers largest modulus first or None, the
-    moved u, its Jacobian or None). Where the step exceeds ``newton_limit`` of the orbit's
+    moved u, its Jacobian or None; with ``with_impacts`` also the impacts per period at that
+    level). Where the step exceeds ``newton_limit`` of the orbit's
     scale (next to a fold or a corner) Newton is run to convergence; raises ConvergenceError
     where that fails."""
     fine = at_level(prob, level)
@@ -627,6 +632,8 @@ def refined_point(prob, u, p, mu0, *, level=1, jac=None, newton_limit=1e-3):
         u1 = u + du
         ev = fine.evaluate(u1, p, jac=want, jac_p=False)
     mu1 = fine.multipliers(ev.Ms) if (want and ev.Ms) else None
+    if with_impacts:
+        return float(ev.xmax), mu1, u1, ev.Ju, int(ev.n_impacts)
     return float(ev.xmax), mu1, u1, ev.Ju
 
 
@@ -636,7 +643,42 @@ def _change(mu_new, mu_old):
     return float(np.max(d))
 
 
-def branch_errors(model, branch, integrator, *, every=1, corners=(), target=1e-5, levels=2):
+# observed ratios of successive multiplier changes d_(k-1) / d_k taken as the method's
+# asymptotic convergence (RK4: 16; order 3.5-4.5), where Richardson extrapolation is valid.
+# Measured on the paper diagram (every 10th point, 181, levels 0-5; python
+# /tmp/s10acc/rules.py): d_1 / d_2 percentiles 5/25/50/75/95 1.1 / 8.6 / 13.9 / 16.5 / 37.8,
+# d_3 / d_4 2.0 / 14.8 / 15.7 / 16.2 / 23.7: level 0 is often not yet asymptotic, so a wider
+# band (8-40) let through points whose ratio was 16 by chance (8.34 Hz: d_1 / d_2 = 23, true
+# error 3.5x the extrapolant's stated one)
+RICHARDSON_RATIOS = (11.0, 22.0)
+RICHARDSON_SAFETY = 2.0  # stated error of the extrapolant: this times its correction
+
+
+def carried_estimate(mu_prev, mu_k, d_prev, d_k, same_impacts, falling=True):
+    """(multipliers reported, their stated error) from the multipliers at two successive
+    levels (mu_k at the finer, matched to mu_prev) and the largest relative changes d_prev
+    (level k-2 to k-1) and d_k (k-1 to k). Where the ratio r = d_prev / d_k shows the
+    method's order (RICHARDSON_RATIOS) and the number of impacts per period did not change
+    (``same_impacts``; a change of impact number is no smooth convergence): the Richardson
+    extrapolant mu_k + (mu_k - mu_prev) / (r - 1), error RICHARDSON_SAFETY times the size of
+    that correction, d_k / (r - 1) (what the extrapolation removed: the error of mu_k). Else
+    mu_k with error d_k where the changes fall at least 4-fold (order >= 2), otherwise
+    (a corner, chattering) twice the larger change; so too where an earlier change did not
+    fall 4-fold (``falling`` False: a sequence that is not converging steadily may fall by
+    chance once; paper 110.944 Hz, order 3: changes 4e-2, 6e-2, 1.1e-2, 1.5e-2)."""
+    r = d_prev / d_k if d_k > 0.0 else math.inf
+    lo, hi = RICHARDSON_RATIOS
+    if not falling:
+        return np.asarray(mu_k), 2.0 * max(d_prev, d_k)
+    if same_impacts and lo <= r <= hi:
+        mu = np.asarray(mu_k) + (np.asarray(mu_k) - np.asarray(mu_prev)) / (r - 1.0)
+        return mu[np.argsort(-np.abs(mu), kind="stable")], RICHARDSON_SAFETY * d_k / (r - 1.0)
+    if d_k <= d_prev / 4:
+        return np.asarray(mu_k), d_k
+    return np.asarray(mu_k), 2.0 * max(d_prev, d_k)
+
+
+def branch_errors(model, branch, integrator, *, every=1, corners=(), target=1e-5, levels=3):
     """Error estimates of a Branch's xmax (m) and multipliers, and its multipliers (and
     stability flags) carried to level 1, at every ``every``-th point (default: every point),
     the two ends and both sides of every corner (``corners``: see ``corner_indices``).
@@ -648,8 +690,14 @@ def branch_errors(model, branch, integrator, *, every=1, corners=(), target=1e-5
     level-1 error 0.04-0.13 of the change on the paper model at 10.5-60 Hz, Duffing, a 2-DOF
     Hertz system and a piecewise-linear stop), as the largest over the point's multipliers of
     error / max(1, |mu|), never below 1e-10. Where that exceeds ``target`` the point is
-    carried on to level 2 (up to ``levels``) and reports those multipliers, error the last
-    change where it fell at least 4-fold, else twice the larger change. A point whose level-1
+    carried on to level 2, 3 (up to ``levels``, while the stated error misses ``target``) and
+    reports what ``carried_estimate`` makes of the last two levels: the Richardson
+    extrapolant where the ratio of the last two changes shows order 4 and the impacts per
+    period stay, else the finest multipliers (error the last change where it fell at least
+    4-fold, else twice the larger change). Paper diagram, every 10th point (181) against
+    level 5: true error median 6.7e-7 -> 1.7e-7, above 1e-5 61 -> 26, stated above 1e-5
+    91 -> 43, true above stated 3 (up to 9.6x) -> 2 (up to 1.7x, at corners where level 5
+    itself still changes) against levels=2 without extrapolation. A point whose level-1
     orbit is not found (next to a fold) keeps its level-0 multipliers; it and, with every >
     1, the points between samples get the larger level-0 estimate (SAFETY times the change)
     of their two nearest computed neighbours along the branch. Returns (xmax_error (n,),
@@ -672,7 +720,8 @@ def branch_errors(model, branch, integrator, *, every=1, corners=(), target=1e-5
                 u, ev, _, _ = prob.solve(u, p, max_iter=6)
                 xm0 = float(ev.xmax)
                 mu0 = prob.multipliers(ev.Ms) if (has_mu and ev.Ms) else None
-            xm1, mu1, u1, J = refined_point(prob, u, p, mu0, jac=ev.Ju)
+            n_0 = int(ev.n_impacts)
+            xm1, mu1, u1, J, n_1 = refined_point(prob, u, p, mu0, jac=ev.Ju, with_impacts=True)
         except (ConvergenceError, ValueError, nlbeam.IntegrationError):
             continue
         xe[i] = SAFETY * abs(xm0 - xm1)
@@ -682,23 +731,31 @@ def branch_errors(model, branch, integrator, *, every=1, corners=(), target=1e-5
         d = _change(mu1, mu0)
         me0[i] = SAFETY * d
         err = d  # level 1: err1 = d / (2^q - 1) <= d for order q >= 1
+        mu_rep = mu1
+        falling = True  # every change from level 1 on fell at least 4-fold
+        # an impact more or less per period between two levels: the finer level follows
+        # another orbit class (chattering; paper 9.664 Hz, order 2: 12 impacts at levels 0-1,
+        # 10 from level 2 on, which converge to 1.13445 while a solve at dt / 16 from the
+        # diagram's orbit finds 0.8493): the error is at least the change across it
+        jump = d if n_0 != n_1 else 0.0
         for k in range(2, levels + 1):
             if err <= target:
                 break
             try:
-                _, mu_k, u1, J = refined_point(prob, u1, p, mu1, level=k, jac=J)
+                _, mu_k, u_k, J, n_k = refined_point(prob, u1, p, mu1, level=k, jac=J,
+                                                     with_impacts=True)
             except (ConvergenceError, ValueError, nlbeam.IntegrationError):
                 break
+            mu_k = match_multipliers(mu1, mu_k)
             d_k = _change(mu_k, mu1)
-            # converging at order >= 2 (changes falling 4-fold): the last change bounds the
-            # error; else (a corner, chattering) twice the larger change. (Roache's 1.25 d /
-            # (r - 1) with the observed ratio r, as ``combine``, was tried: 13 of 100 points
-            # of test_diagram_multipliers_meet_the_default_target's paper case above it, up to
-            # 3.7x: past level 1 the multipliers converge more slowly than the ratio says)
-            err = d_k if d_k <= d / 4 else 2.0 * max(d, d_k)
-            d, mu1 = d_k, mu_k
+            # the three levels of the ratio d / d_k have the same impacts per period
+            mu_rep, err = carried_estimate(mu1, mu_k, d, d_k, n_0 == n_1 == n_k, falling)
+            falling = falling and d_k <= d / 4
+            jump = max(jump, d_k) if n_k != n_1 else jump
+            d, mu1, u1, n_0, n_1 = d_k, mu_k, u_k, n_1, n_k
+        err = max(err, jump)
         me[i] = max(err, 1e-10)
-        mus[i] = mu1
+        mus[i] = mu_rep
     idx = np.nonzero(sampled)[0]
     if idx.size:
         left = np.searchsorted(idx, np.arange(n), side="right") - 1
@@ -717,8 +774,9 @@ def _short(values, n=8):
 
 
 def point_levels(digits):
-    """The finest level a branch point is carried to: 2 up to 6 digits, else 3."""
-    return 2 if digits <= 6.0 else 3
+    """The finest level a branch point is carried to: 3 up to 6 digits, else 4 (a point goes
+    on to the next level only while its stated multiplier error misses the target)."""
+    return 3 if digits <= 6.0 else 4
 
 
 def _branch_job(args):

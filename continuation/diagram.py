@@ -1149,7 +1149,8 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
     frequency becomes the finer, extrapolated value); grazing points are located once more
     with the step halved; every branch point gets error estimates of xmax and of the
     multipliers, and its multipliers and stability flag are those of the orbit carried to
-    the step halved (continuation.accuracy.branch_errors, estimate_diagram). One
+    the step halved, quartered, ... while their error misses the target (extrapolated where
+    the changes show order 4; continuation.accuracy.branch_errors, estimate_diagram). One
     ContinuationWarning lists what misses the target (multipliers: 10^-(digits - 1)); the
     branch points stay those of the integrator (dt_scale, steps_per_contact) given.
     workers: local processes (None: the CPU count; default 1, this process only), scheduler:
