@@ -17,8 +17,9 @@ dR/du comes from the shooting problem (variational equations); dR/df and dR/dq b
 differences; the row of g by forward differences, one monodromy per unknown, except, for a
 fold or period doubling, over the shooting states: all of those from one monodromy, evaluated
 with the states moved along the bordered system's right vector (CurveSystem._g_row_states);
-the rows of the grazing conditions by forward differences (one flow per unknown). When the monodromy is the exact derivative of the discrete map,
-Newton on this system converges quadratically; it converges linearly (fast) otherwise.
+the rows of the grazing conditions by forward differences (one flow per unknown). When the
+monodromy is the exact derivative of the discrete map, Newton on this system converges
+quadratically; it converges linearly (fast) otherwise.
 """
 from __future__ import annotations
 
