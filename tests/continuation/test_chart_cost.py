@@ -2,8 +2,9 @@
 the same unknowns gives the same residual and Jacobian as a fresh system for one shooting
 evaluation less; the test function's row over the shooting states from one evaluation agrees
 with central differences of the test function (one evaluation per state); a bifurcation of
-an orbit taken m times round (a branch of order m k along an orbit of order k) is recognised as a point of the order-k curve, by the multiplier power rule
-mu -> mu^m, and nothing else is."""
+an orbit taken m times round (a branch of order m k along an orbit of order k) is recognised
+as a point of the order-k curve, by the multiplier power rule mu -> mu^m, and nothing else
+is."""
 import types
 
 import numpy as np
