@@ -194,6 +194,9 @@ class CurveSystem:
         self.D = self.n + 2 + (1 if self.grazing else 0)
         self.n_evaluations = 0
         self._last = None  # (problem, z bytes, with monodromy, Evaluation): _evaluate
+        # the fold / period-doubling row over the states from one evaluation (_g_row_states);
+        # False: one difference per state (the tracer's fallback where a step fails)
+        self.row_from_one = True
         z = np.r_[u0 / self.prob.scale_u, math.log(frequency), self.q_of(p0)]
         if self.grazing:
             self.element, phase = self._grazing_start(u0, frequency, p0, element, phase)
@@ -376,7 +379,8 @@ class CurveSystem:
         J[:n, :n] = ev.Ju * w[None, :] / w[:, None]
         h = 1e-6
         columns = range(D)
-        if not self.grazing and self.kind != "neimark-sacker" and ev.Ms:
+        if (self.row_from_one and not self.grazing and self.kind != "neimark-sacker"
+                and ev.Ms):
             # the test function's row in the shooting states from one evaluation
             J[n, :n] = self._g_row_states(z, ev, h)
             columns = (n, n + 1)
