@@ -70,6 +70,13 @@ def test_test_function_row_from_one_evaluation_agrees_with_differences(model, A,
     # the other rows and columns: as before (variational dR/du; forward differences)
     assert np.max(np.abs(J[:s.n, :s.n] - s.prob.evaluate(*s.unpack(z)[:2], jac_p=False).Ju
                          * s.prob.scale_u[None, :] / s.prob.scale_u[:, None])) < 1e-12
+    # the tracer's fallback (row_from_one False): one difference per unknown
+    s.row_from_one = False
+    n0 = s.n_evaluations
+    J1 = s.evaluate(z + 0.0).J
+    assert s.n_evaluations - n0 == 1 + s.D  # the point itself, then one per unknown
+    assert np.max(np.abs(J1[s.n, :s.n] - ref)) <= 1e-3 * np.max(np.abs(ref))
+    np.testing.assert_array_equal(J1[:, s.n:], J[:, s.n:])  # the same other columns
 
 
 def _curve(kind, order, f, state, A0=1e-4):
