@@ -356,7 +356,8 @@ class _Tracer:
                 if la.dot(t, a.t) < self.cos_max:
                     raise ConvergenceError("angle")
             except ConvergenceError:
-                if s.row_from_one and a.st.J is not None and len(a.st.z) == s.D:
+                if (s.one_row_kind and s.row_from_one and a.st.J is not None
+                        and len(a.st.z) == s.D):
                     # the test function's row from one evaluation assumes a smooth flow
                     # (symmetric second derivatives); where a step fails (a non-smooth,
                     # e.g. chattering, stretch) the point's Jacobian and tangent again with

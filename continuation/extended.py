@@ -197,6 +197,7 @@ class CurveSystem:
         # the fold / period-doubling row over the states from one evaluation (_g_row_states);
         # False: one difference per state (the tracer's fallback where a step fails)
         self.row_from_one = True
+        self.one_row_kind = kind in ("fold", "period-doubling")  # the others: differences
         z = np.r_[u0 / self.prob.scale_u, math.log(frequency), self.q_of(p0)]
         if self.grazing:
             self.element, phase = self._grazing_start(u0, frequency, p0, element, phase)
@@ -379,8 +380,7 @@ class CurveSystem:
         J[:n, :n] = ev.Ju * w[None, :] / w[:, None]
         h = 1e-6
         columns = range(D)
-        if (self.row_from_one and not self.grazing and self.kind != "neimark-sacker"
-                and ev.Ms):
+        if self.row_from_one and self.one_row_kind and ev.Ms:
             # the test function's row in the shooting states from one evaluation
             J[n, :n] = self._g_row_states(z, ev, h)
             columns = (n, n + 1)
