@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -24,6 +24,9 @@ from .extended import KINDS, CurveSystem
 from .pathfollow import test_functions
 from .shooting import Integrator
 
+#: steps accepted in a row after which the extended system's test-function row over the states
+#: is again taken from one evaluation (CurveSystem.row_from_one; _Tracer.trace)
+SMOOTH_STEPS = 10
 CODIM2 = ("cusp", "fold-flip", "fold-grazing", "flip-grazing", "neimark-sacker-grazing")
 
 
@@ -224,6 +227,7 @@ class _Tracer:
         second parameter moves in ``direction`` (+1 / -1) (or, when the curve starts
         perpendicular to it, the frequency)."""
         s = self.s
+        s.row_from_one = True
         z0 = s.z0
         try:  # at the start's second-parameter value
             row = np.zeros(s.D)
@@ -322,6 +326,8 @@ class _Tracer:
         ds_fail = None  # the last step that failed (growth stays below it for a while)
         n0 = s.n_evaluations
         z_start = p0.st.z
+        accepted = 0  # steps accepted since the last failure
+        s.row_from_one = True
         while True:
             if len(pts) >= self.max_points:
                 return pts, "max_points"
@@ -350,11 +356,27 @@ class _Tracer:
                 if la.dot(t, a.t) < self.cos_max:
                     raise ConvergenceError("angle")
             except ConvergenceError:
+                if (s.one_row_kind and s.row_from_one and a.st.J is not None
+                        and len(a.st.z) == s.D):
+                    # the test function's row from one evaluation assumes a smooth flow
+                    # (symmetric second derivatives); where a step fails (a non-smooth,
+                    # e.g. chattering, stretch) the point's Jacobian and tangent again with
+                    # one difference per unknown, and the step retried; back to the one
+                    # evaluation after SMOOTH_STEPS steps accepted in a row
+                    s.row_from_one = False
+                    accepted = 0
+                    st_a = s.evaluate(a.st.z)
+                    a = replace(a, st=st_a, t=_tangent(st_a.J, a.t))
+                    continue
                 ds_fail = ds
                 ds *= 0.5
+                accepted = 0
                 if ds < self.ds_min:
                     return pts, "step underflow"
                 continue
+            accepted += 1
+            if accepted >= SMOOTH_STEPS:
+                s.row_from_one = True
             b = self.make_point(st, t)
             if bend is not None:
                 # the predictor for the next step: the one that came closer on this one

@@ -13,10 +13,13 @@ Equations: the shooting residual R(u, f, p) = 0 and
 - grazing: delta_e = 0 and d(delta_e)/dt = 0 at the grazing phase (the orbit touches stop e with
   zero relative velocity).
 
-dR/du and dR/df come from the shooting problem (variational equations); dR/dq by a forward
-difference; the rows of g and of the grazing conditions by central differences (one monodromy,
-or one flow, per unknown). When the monodromy is the exact derivative of the discrete map,
-Newton on this system converges quadratically; it converges linearly (fast) otherwise.
+dR/du comes from the shooting problem (variational equations); dR/df and dR/dq by forward
+differences; the row of g by forward differences, one monodromy per unknown, except, for a
+fold or period doubling, over the shooting states: all of those from one monodromy, evaluated
+with the states moved along the bordered system's right vector (CurveSystem._g_row_states);
+the rows of the grazing conditions by forward differences (one flow per unknown). When the
+monodromy is the exact derivative of the discrete map, Newton on this system converges
+quadratically; it converges linearly (fast) otherwise.
 """
 from __future__ import annotations
 
@@ -72,6 +75,22 @@ def bordered(A, b, c):
     rhs = np.zeros(n + 1)
     rhs[n] = 1.0
     return float(la.solve(K, rhs)[n])
+
+
+def bordered_vectors(A, b, c):
+    """(g, v, w): the bordered test function of A (``bordered``) with the right vector v and
+    the left vector w of its bordered system ([[A, b], [c^T, 0]] [v; g] = [0; 1] and the
+    transposed system for w), so that g's derivative in a change dA of A is -w^T dA v."""
+    n = len(A)
+    K = np.zeros((n + 1, n + 1))
+    K[:n, :n] = A
+    K[:n, n] = b
+    K[n, :n] = c
+    rhs = np.zeros(n + 1)
+    rhs[n] = 1.0
+    x = la.solve(K, rhs)
+    y = la.solve(np.ascontiguousarray(K.T), rhs)
+    return float(x[n]), x[:n], y[:n]
 
 
 def borders(A):
@@ -175,6 +194,10 @@ class CurveSystem:
         self.D = self.n + 2 + (1 if self.grazing else 0)
         self.n_evaluations = 0
         self._last = None  # (problem, z bytes, with monodromy, Evaluation): _evaluate
+        # the fold / period-doubling row over the states from one evaluation (_g_row_states);
+        # False: one difference per state (the tracer's fallback where a step fails)
+        self.row_from_one = True
+        self.one_row_kind = kind in ("fold", "period-doubling")  # the others: differences
         z = np.r_[u0 / self.prob.scale_u, math.log(frequency), self.q_of(p0)]
         if self.grazing:
             self.element, phase = self._grazing_start(u0, frequency, p0, element, phase)
@@ -331,7 +354,9 @@ class CurveSystem:
         """A CurveState at z: G (D - 1,) and (with jac) its Jacobian (D - 1, D), scaled.
         dR/du from the variational equations; every other column by forward differences
         (step 1e-6 in the scaled unknowns): one evaluation with the monodromy per unknown
-        gives the test function's row and, for frequency and parameter, dR/df and dR/dq
+        gives the test function's row and, for frequency and parameter, dR/df and dR/dq;
+        for a fold or period doubling the row's entries over the shooting states come from
+        one evaluation (_g_row_states), so a Jacobian costs 3 evaluations, not n + 2
         (grazing: one flow to the grazing phase per unknown, and two shooting evaluations)."""
         n, D = self.n, self.D
         w = self.prob.scale_u
@@ -354,7 +379,12 @@ class CurveSystem:
         J = np.zeros((D - 1, D))
         J[:n, :n] = ev.Ju * w[None, :] / w[:, None]
         h = 1e-6
-        for i in range(D):
+        columns = range(D)
+        if self.row_from_one and self.one_row_kind and ev.Ms:
+            # the test function's row in the shooting states from one evaluation
+            J[n, :n] = self._g_row_states(z, ev, h)
+            columns = (n, n + 1)
+        for i in columns:
             zp = z.copy()
             zp[i] += h
             if self.grazing:
@@ -368,6 +398,45 @@ class CurveSystem:
                 J[:n, i] = (evp.R - ev.R) / (h * w)
         self._last = (self.prob, z.tobytes(), True, ev)  # the point's, not the last column's
         return CurveState(z.copy(), G, J, mu, float(ev.xmax), int(ev.n_impacts))
+
+    def _g_row_states(self, z, ev, h):
+        """dg/dz over the scaled shooting states (n,) of a fold or period-doubling test
+        function g, from ONE more evaluation with the monodromies instead of one per state.
+        g's derivative is -w^T dM v (bordered_vectors; dM = dA for M -+ I). With
+        M = M_{m-1} ... M_0 (segment j's M_j a function of its start U_j only),
+        dg/dU_j,i = -w_j^T (dM_j/dU_j,i) v_j, w_j = (M_{m-1} ... M_{j+1})^T w,
+        v_j = M_{j-1} ... M_0 v; and (dM_j/dU_j,i) v_j = (dM_j[v_j]) e_i, the derivative of
+        M_j along v_j (the second derivatives of a smooth flow are symmetric), which one
+        evaluation with every U_j moved along its v_j gives by a forward difference (largest
+        move h in the scaled states, as the columns' differences)."""
+        n, N2 = self.n, self.prob.N2
+        w = self.prob.scale_u
+        Ms = list(ev.Ms)
+        M = self.prob.monodromy(Ms)
+        _, v, wl = bordered_vectors(singular_matrix(self.kind, M), self.b, self.c)
+        m = len(Ms)
+        vs, ws = [], [None] * m
+        x = v
+        for j in range(m):
+            vs.append(x)
+            x = la.matmul(Ms[j], x)
+        y = wl
+        for j in range(m - 1, -1, -1):
+            ws[j] = y
+            y = la.matmul(np.ascontiguousarray(Ms[j].T), y)
+        d = np.concatenate(vs)
+        big = float(np.max(np.abs(d / w)))
+        if not big > 0:
+            return np.zeros(n)
+        s = h / big
+        zp = z.copy()
+        zp[:n] = z[:n] + s * d / w
+        Mp = list(self._evaluate(zp, True).Ms)
+        row = np.empty(n)
+        for j in range(m):
+            dM = (Mp[j] - Ms[j]) / s
+            row[j * N2:(j + 1) * N2] = -la.matmul(dM.T.copy(), ws[j])
+        return row * w
 
     def _multipliers_of(self, z, ev):
         """A callable: the multipliers at z (ev: its evaluation). On a grazing curve of a

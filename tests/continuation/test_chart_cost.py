@@ -1,8 +1,10 @@
 """What the stability chart's cost cuts keep exact: the extended system's evaluation kept for
 the same unknowns gives the same residual and Jacobian as a fresh system for one shooting
-evaluation less; a bifurcation of an orbit taken m times round (a branch of order m k along an
-orbit of order k) is recognised as a point of the order-k curve, by the multiplier power rule
-mu -> mu^m, and nothing else is."""
+evaluation less; the test function's row over the shooting states from one evaluation agrees
+with central differences of the test function (one evaluation per state); a bifurcation of
+an orbit taken m times round (a branch of order m k along an orbit of order k) is recognised
+as a point of the order-k curve, by the multiplier power rule mu -> mu^m, and nothing else
+is."""
 import types
 
 import numpy as np
@@ -24,7 +26,9 @@ def test_kept_evaluation_gives_a_fresh_systems_residual_and_jacobian():
     n0 = a.n_evaluations
     res = a.evaluate(z, jac=False)  # the corrector's last iterate
     full = a.evaluate(z)  # then the point's Jacobian at the same unknowns
-    assert a.n_evaluations - n0 == 1 + a.D  # not 2 + D: the residual's evaluation kept
+    # not 2 + 3: the residual's evaluation kept (3: the test function's row over the states
+    # from one evaluation, the frequency and parameter columns one each)
+    assert a.n_evaluations - n0 == 1 + 3
     ref = b.evaluate(z.copy())
     assert np.array_equal(res.G, ref.G) and np.array_equal(full.G, ref.G)
     assert np.array_equal(full.J, ref.J)
@@ -34,6 +38,45 @@ def test_kept_evaluation_gives_a_fresh_systems_residual_and_jacobian():
     z2 = z.copy()
     z2[a.n] += 1e-4  # other unknowns: evaluated anew
     assert not np.array_equal(a.evaluate(z2, jac=False).G, res.G)
+
+
+@pytest.mark.parametrize("model, A, f, kind, segments", [
+    (nlbeam.Duffing(), 0.3, 0.2, "fold", 1),
+    (nlbeam.Duffing(), 0.3, 0.2, "period-doubling", 3),
+    (nlbeam.Duffing(), 0.3, 0.2, "fold", 4),
+    (nlbeam.BeamImpact(), 1e-4, 58.0, "period-doubling", 2),  # impacts; segment in contact
+    (nlbeam.BeamImpact(), 1e-4, 40.0, "fold", 1),
+])
+def test_test_function_row_from_one_evaluation_agrees_with_differences(model, A, f, kind,
+                                                                       segments):
+    """CurveSystem._g_row_states: dg over the shooting states (all segments) from one more
+    evaluation (symmetric second derivatives of the flow, chained over the segments), against
+    central differences of g, one pair of evaluations per state; and a Jacobian costs 3
+    evaluations whatever the number of states."""
+    sol = C.periodic_solution(model, A, f, segments=segments, error=False)
+    s = CurveSystem(model, kind, 1, A, f, sol.state0, "amplitude", Integrator(),
+                    segments=segments)
+    z = s.z0
+    n0 = s.n_evaluations
+    J = s.evaluate(z).J
+    assert s.n_evaluations - n0 == 3 and s.n == 2 * model.n_dof * segments
+    h = 1e-5
+    ref = np.empty(s.n)
+    for i in range(s.n):
+        e = np.zeros(s.D)
+        e[i] = h
+        ref[i] = (s.evaluate(z + e, jac=False).G[-1] - s.evaluate(z - e, jac=False).G[-1]) / (2 * h)
+    assert np.max(np.abs(J[s.n, :s.n] - ref)) <= 1e-4 * np.max(np.abs(ref))
+    # the other rows and columns: as before (variational dR/du; forward differences)
+    assert np.max(np.abs(J[:s.n, :s.n] - s.prob.evaluate(*s.unpack(z)[:2], jac_p=False).Ju
+                         * s.prob.scale_u[None, :] / s.prob.scale_u[:, None])) < 1e-12
+    # the tracer's fallback (row_from_one False): one difference per unknown
+    s.row_from_one = False
+    n0 = s.n_evaluations
+    J1 = s.evaluate(z + 0.0).J
+    assert s.n_evaluations - n0 == 1 + s.D  # the point itself, then one per unknown
+    assert np.max(np.abs(J1[s.n, :s.n] - ref)) <= 1e-3 * np.max(np.abs(ref))
+    np.testing.assert_array_equal(J1[:, s.n:], J[:, s.n:])  # the same other columns
 
 
 def _curve(kind, order, f, state, A0=1e-4):
