@@ -64,9 +64,8 @@ def singular_matrix(kind, M):
     return C - np.eye(len(C))
 
 
-def bordered(A, b, c):
-    """The bordered test function g of A: zero exactly where A is singular (b, c: vectors
-    not orthogonal to A's left and right null vectors there)."""
+def _bordered_system(A, b, c):
+    """(K, rhs): the bordered matrix [[A, b], [c^T, 0]] and the right-hand side [0; 1]."""
     n = len(A)
     K = np.zeros((n + 1, n + 1))
     K[:n, :n] = A
@@ -74,7 +73,14 @@ def bordered(A, b, c):
     K[n, :n] = c
     rhs = np.zeros(n + 1)
     rhs[n] = 1.0
-    return float(la.solve(K, rhs)[n])
+    return K, rhs
+
+
+def bordered(A, b, c):
+    """The bordered test function g of A: zero exactly where A is singular (b, c: vectors
+    not orthogonal to A's left and right null vectors there)."""
+    K, rhs = _bordered_system(A, b, c)
+    return float(la.solve(K, rhs)[-1])
 
 
 def bordered_vectors(A, b, c):
@@ -82,12 +88,7 @@ def bordered_vectors(A, b, c):
     the left vector w of its bordered system ([[A, b], [c^T, 0]] [v; g] = [0; 1] and the
     transposed system for w), so that g's derivative in a change dA of A is -w^T dA v."""
     n = len(A)
-    K = np.zeros((n + 1, n + 1))
-    K[:n, :n] = A
-    K[:n, n] = b
-    K[n, :n] = c
-    rhs = np.zeros(n + 1)
-    rhs[n] = 1.0
+    K, rhs = _bordered_system(A, b, c)
     x = la.solve(K, rhs)
     y = la.solve(np.ascontiguousarray(K.T), rhs)
     return float(x[n]), x[:n], y[:n]
