@@ -596,16 +596,7 @@ def _merged_grazing(bf, bifs):
                 and abs(o.value - bf.value) <= (o.tolerance + bf.tolerance
                                                 + GRAZING_RESOLUTION * abs(bf.value))):
             o.tolerance = max(o.tolerance, abs(o.value - bf.value) + bf.tolerance)
-            if bf.kind == "grazing":
-                k = int(o.note.split()[0]) if o.note.endswith("within the bracket") else 1
-                o.note = f"{k + 1} changes of the number of impacts within the bracket"
-            else:
-                head, tail = o.note, "such jumps within the bracket)"
-                k = 1
-                if head.endswith(tail):
-                    head, _, count = head[:-len(tail)].rpartition(" (")
-                    k = int(count)
-                o.note = f"{head} ({k + 1} {tail}"
+            o.note = _counted_note(o, _changes(o) + 1)
             return True
     return False
 
@@ -656,14 +647,7 @@ def _merged_clusters(bifs):
             errs = [bifs[i].error for i in c if np.isfinite(bifs[i].error)]
             if errs:
                 k.error = max(errs)
-            if k.kind == "grazing":
-                k.note = f"{n} changes of the number of impacts within the bracket"
-            else:
-                tail = " such jumps within the bracket)"
-                head = k.note
-                if head.endswith(tail):
-                    head = head[:-len(tail)].rpartition(" (")[0]
-                k.note = f"{head} ({n}{tail}"
+            k.note = _counted_note(k, n)
             drop.update(i for i in c if i != keep)
     return [b for i, b in enumerate(bifs) if i not in drop]
 
@@ -676,6 +660,18 @@ def _changes(bf):
     if note.endswith("such jumps within the bracket)"):
         return int(note.rsplit(" (", 1)[1].split()[0])
     return 1
+
+
+def _counted_note(bf, n):
+    """bf's note counting n changes of the number of impacts (grazing) or n jumps of a
+    multiplier (a bifurcation at grazing points: its own note, the count appended)."""
+    if bf.kind == "grazing":
+        return f"{n} changes of the number of impacts within the bracket"
+    tail = " such jumps within the bracket)"
+    head = bf.note
+    if head.endswith(tail):
+        head = head[:-len(tail)].rpartition(" (")[0]
+    return f"{head} ({n}{tail}"
 
 
 def _polished_starts(model, amplitude, frequency, parameter, orders, cand, segments,

@@ -62,14 +62,6 @@ _F_MAX = weakref.WeakKeyDictionary()  # System -> highest natural frequency (Hz)
 _CUBIC = weakref.WeakKeyDictionary()  # System -> [(k3, w)] of its hardening cubic springs
 
 
-def _dot(a, b):
-    """a . b summed in index order (numpy's @ of vectors is BLAS's ddot: CPU-dependent bits)."""
-    s = 0.0
-    for i in range(len(a)):
-        s = s + float(a[i]) * float(b[i])
-    return s
-
-
 def highest_natural_frequency(model):
     """Highest undamped natural frequency (Hz) of the model's linear structure (cached)."""
     sysm = model.system
@@ -212,8 +204,8 @@ class Solver:
         N = w.shape[1]
         disc = np.zeros((len(gap), 2))
         for e in elements:
-            d = _dot(w[e], state[:N]) + wy[e] * y - gap[e]
-            dd = _dot(w[e], state[N:]) + wy[e] * yd
+            d = la.dot(w[e], state[:N]) + wy[e] * y - gap[e]
+            dd = la.dot(w[e], state[N:]) + wy[e] * yd
             if d > 0:
                 disc[e, 0] = 1.0
                 disc[e, 1] = dd if dd > VMINUS_FLOOR else VMINUS_FLOOR
@@ -264,7 +256,7 @@ def stiffened_frequency(model, xmax):
         return None
     K = np.array(sysm.K, dtype=float)
     for k3, w in cubic:
-        d = _dot(np.abs(w), np.abs(np.asarray(xmax, dtype=float)))
+        d = la.dot(np.abs(w), np.abs(np.asarray(xmax, dtype=float)))
         K += 3.0 * k3 * d * d * np.outer(w, w)
     lam = la.eigvals(la.solve(sysm.M, K))
     return float(np.sqrt(np.abs(lam.real)).max() / (2 * np.pi))

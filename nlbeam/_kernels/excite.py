@@ -151,17 +151,33 @@ def excite(t, code, p, tab):
         return y, yd, ydd, 0
 
 
+@njit(cache=True, inline="always")
+def _coef_yyd(t, p, tab):
+    """(y, y', status) of a coefficient table (code 4) at time t."""
+    i, th, st = _coef_cell(t, p, tab)
+    if st != 0:
+        return 0.0, 0.0, st
+    y, yd = _coef_y_yd(i, th, tab)
+    return y, yd, 0
+
+
+@njit(cache=True, inline="always")
+def _cubic_yyd(t, p, tab):
+    """(y, y', status) of a cubic table (code 1) at time t, by ``excite``'s expressions."""
+    i, th, th2, th3, h, st = _table_cell(t, p, tab)
+    if st != 0:
+        return 0.0, 0.0, st
+    y, yd, nan_ydd = _table_y_yd(i, th, th2, th3, h, tab)
+    return y, yd, 0
+
+
 @njit(cache=True)
 def excite_yyd(t, code, p, tab):
     """(y, y', status) at time t: ``excite`` without y'' (what a right-hand side needs). The
     sampled table (code 1) is evaluated by the same expressions as in ``excite`` (bit for bit
     the same y, y'), without the y'' polynomial; so are the quintic tables (codes 3, 4)."""
     if code == 4:
-        i, th, st = _coef_cell(t, p, tab)
-        if st != 0:
-            return 0.0, 0.0, st
-        y, yd = _coef_y_yd(i, th, tab)
-        return y, yd, 0
+        return _coef_yyd(t, p, tab)
     if code == 3:
         i, th, th2, th3, h, st = _table_cell(t, p, tab)
         if st != 0:
@@ -171,11 +187,7 @@ def excite_yyd(t, code, p, tab):
     if code != 1:
         y, yd, ydd, st = excite(t, code, p, tab)
         return y, yd, st
-    i, th, th2, th3, h, st = _table_cell(t, p, tab)
-    if st != 0:
-        return 0.0, 0.0, st
-    y, yd, nan_ydd = _table_y_yd(i, th, th2, th3, h, tab)
-    return y, yd, 0
+    return _cubic_yyd(t, p, tab)
 
 
 @njit(cache=True, inline="always")
@@ -185,17 +197,9 @@ def excite_yyd_inline(t, code, p, tab):
     y, y' bit for bit) without the call, which passes both arrays exploded into ~16 scalar
     arguments; any other code calls ``excite_yyd``."""
     if code == 4:
-        i, th, st = _coef_cell(t, p, tab)
-        if st != 0:
-            return 0.0, 0.0, st
-        y, yd = _coef_y_yd(i, th, tab)
-        return y, yd, 0
+        return _coef_yyd(t, p, tab)
     if code == 1:
-        i, th, th2, th3, h, st = _table_cell(t, p, tab)
-        if st != 0:
-            return 0.0, 0.0, st
-        y, yd, nan_ydd = _table_y_yd(i, th, th2, th3, h, tab)
-        return y, yd, 0
+        return _cubic_yyd(t, p, tab)
     return excite_yyd(t, code, p, tab)
 
 
