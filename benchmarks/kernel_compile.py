@@ -1,6 +1,7 @@
 """CPU time of the integration kernels' first compile, as on a fresh machine.
 
 python benchmarks/kernel_compile.py [--by-function] [plain var | var plain | ...]
+python benchmarks/kernel_compile.py --overlap [--repeat N]
 
 Runs one fresh interpreter with numba's cache in an empty temporary folder (NUMBA_CACHE_DIR:
 the kernels cached in this checkout are not read) and compiles the kernels in the order given
@@ -12,6 +13,11 @@ one). Times vary with load; CPU seconds are steadier than wall seconds on a shar
 ``--by-function``: also every numba function compiled on the way, indented by call depth, with
 the CPU seconds of its compile including what it called (what numba compiled twice shows up
 as two lines of one name).
+``--overlap``: both kernels of the paper model as a scene run prepares them
+(``nlbeam.app.warmup.prepare_kernels`` of a diagram's inputs), in a fresh cache each: once
+with ``OVERLAP = False`` (plain then variational here) and once with the variational kernel
+in a second process beside the plain one; prints wall seconds and the CPU seconds of this
+process and of its children, alternating the two ``--repeat`` times (default 1).
 """
 import os
 import subprocess
@@ -59,7 +65,36 @@ if TRACED:
 """
 
 
+OVERLAP = """
+import resource, sys, time
+from nlbeam.app import warmup
+warmup.OVERLAP = sys.argv[1] == "on"
+t, c = time.perf_counter(), time.process_time()
+n = warmup.prepare_kernels([{"analysis": "periodic", "model": {"name": "BeamImpact"},
+                             "periodic": {"stability": True}}])
+wall, cpu = time.perf_counter() - t, time.process_time() - c
+child = resource.getrusage(resource.RUSAGE_CHILDREN)
+import nlbeam
+k = nlbeam.BeamImpact.paper().kernels()
+hits = sum(k.integrate_var.stats.cache_hits.values())
+print(f"overlap {sys.argv[1]:>3}: {n} kernels, {wall:6.1f} s wall, {cpu:6.1f} s CPU here, "
+      f"{child.ru_utime + child.ru_stime:6.1f} s CPU in a second process; variational kernel "
+      f"{'loaded from the cache' if hits else 'compiled here'}", flush=True)
+"""
+
+
+def overlap(args):
+    repeat = int(args[args.index("--repeat") + 1]) if "--repeat" in args else 1
+    for _ in range(repeat):
+        for mode in ("off", "on"):
+            with tempfile.TemporaryDirectory(prefix="nlbeam-numba-cache-") as cache:
+                env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+                subprocess.run([sys.executable, "-c", OVERLAP, mode], env=env, check=True)
+
+
 def main(args):
+    if "--overlap" in args:
+        return overlap(args)
     traced = "--by-function" in args
     order = [a for a in args if a != "--by-function"] or ["plain", "var"]
     for what in order:
