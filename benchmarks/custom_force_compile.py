@@ -52,8 +52,8 @@ def main(args):
     with tempfile.TemporaryDirectory(prefix="nlbeam-custom-bench-") as tmp:
         with open(os.path.join(tmp, "bench_force.py"), "w") as f:
             f.write(FORCE)
-        env = dict(os.environ, NLBEAM_CACHE_DIR=os.path.join(tmp, "nlbeam"),
-                   NUMBA_CACHE_DIR=os.path.join(tmp, "numba"),
+        env = dict(os.environ, NLBEAM_CACHE_DIR=os.path.join(tmp, "kernel-copies"),
+                   NUMBA_CACHE_DIR=os.path.join(tmp, "numba-cache"),
                    PYTHONPATH=os.pathsep.join([tmp] + sys.path))
         for n in (1, 2):
             subprocess.run([sys.executable, "-c", CODE, str(n), "1" if monodromy else "0"],

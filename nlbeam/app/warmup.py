@@ -126,7 +126,9 @@ class _SecondProcess:
         spec = os.path.join(self.folder, "model.pkl")
         with open(spec, "wb") as f:
             pickle.dump(model_inputs, f)
-        env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(self.folder, "cache"))
+        # (this process's import path: a model factory the scene names imports there too)
+        env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(self.folder, "cache"),
+                   PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
         self.proc = subprocess.Popen([sys.executable, "-m", __name__, spec], env=env,
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
