@@ -317,11 +317,10 @@ class _Tracer:
         return float(np.max(np.abs(near.state0 - p0.state0))) <= (2 * ds + 1e-3) * size
 
     def _slow_end(self, pts, last):
-        """The end reason of a trace whose steps the corrector limits (SLOW_STEPS)."""
+        """The end reason of a trace whose steps the corrector limits (SLOW_STEPS): where."""
         f = [p.frequency for p in pts[-SLOW_STEPS:]]
         v = [p.value for p in pts[-SLOW_STEPS:]]
-        return (f"corrector-limited: {sum(v[1] for v in last)} corrector failures in "
-                f"{SLOW_STEPS} steps of mean {sum(v[0] for v in last) / SLOW_STEPS:.2g} over "
+        return (f"corrector-limited: {sum(x[1] for x in last)} failures in {SLOW_STEPS} steps, "
                 f"{min(f):.6g}-{max(f):.6g} Hz, {self.s.parameter} {min(v):.4g}-{max(v):.4g}")
 
     def trace(self, p0, on_step):
@@ -695,7 +694,8 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     cusp, fold-flip, a curve meeting a grazing curve, i.e. the number of impacts per period
     changes along it) are in ``special``. Returns a BifurcationCurve; a ContinuationWarning
     says where a trace stopped short of the ranges (step underflow, max_points,
-    max_evaluations); a start that does not converge raises ConvergenceError.
+    max_evaluations, corrector-limited: short steps with repeated corrector failures, e.g. a
+    chattering stretch, SLOW_STEPS); a start that does not converge raises ConvergenceError.
     """
     t_wall = time.perf_counter()
     integrator = integrator or Integrator(**integrator_kw)
@@ -779,8 +779,12 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
              or e.startswith("corrector-limited")]
     if stuck:
         warnings.warn(f"bifurcation_curve: the {kind} curve (order {order}) from "
-                      f"{f0:.6g} Hz stopped short of the ranges ({', '.join(stuck)}): try a "
-                      "smaller ds_max or more max_points, or segments=4 (multiple shooting)",
+                      f"{f0:.6g} Hz stopped short of the ranges ({'; '.join(stuck)}): try a "
+                      "smaller ds_max or more max_points, or segments=4 (multiple shooting)"
+                      + ("; a corrector-limited stretch (chattering orbits: the extended system "
+                         "is not smooth there) is ended on purpose: a smaller dt_scale or "
+                         "another start beyond it" if any(e.startswith("corrector-limited")
+                                                          for e in stuck) else ""),
                       ContinuationWarning, stacklevel=2)
     f = np.array([p.frequency for p in pts])
     v = np.array([p.value for p in pts])

@@ -29,7 +29,7 @@ def _curve(bf, directions=(1, -1)):
                                    directions=directions, **RANGES)
 
 
-def test_a_chattering_stretch_ends_the_trace_as_a_truncation(monkeypatch):
+def test_a_chattering_stretch_ends_the_trace_as_a_truncation(monkeypatch, tmp_path):
     """The order-1 period doubling near 9.33 Hz (A = 0.1 mm, 7 impacts per period): towards
     lower amplitudes its trace crawls near 9.21-9.26 Hz; with the rule it ends there
     'corrector-limited', its points the first ones of the trace without the rule (which goes
@@ -38,10 +38,12 @@ def test_a_chattering_stretch_ends_the_trace_as_a_truncation(monkeypatch):
     bf = [b for b in frc.bifurcations if b.kind == "period-doubling" and b.smooth][0]
     stopped = _curve(bf, directions=(-1,))
     assert stopped.ends[1].startswith("corrector-limited: ")
-    lo, hi = (float(v) for v in stopped.ends[1].split(" over ")[1].split(" Hz")[0].split("-"))
+    lo, hi = (float(v) for v in stopped.ends[1].split(" steps, ")[1].split(" Hz")[0].split("-"))
     # the stretch named is where the trace's last SLOW_STEPS points lie
     tail = stopped.frequency[-CU.SLOW_STEPS:]
     assert lo == pytest.approx(tail.min(), rel=1e-5) and hi == pytest.approx(tail.max(), rel=1e-5)
+    stopped.save(tmp_path / "curve.h5")  # the end's text whole in the file
+    assert C.load_curves(tmp_path / "curve.h5").ends == stopped.ends
     monkeypatch.setattr(CU, "SLOW_STEPS", 10 ** 9)
     full = _curve(bf, directions=(-1,))
     assert not full.ends[1].startswith("corrector-limited")
