@@ -35,7 +35,7 @@ SMOOTH_STEPS = 10
 #: a turn, where steps are short too) (_Tracer.trace): a stretch where the extended system is
 #: not smooth at the step's scale (the paper chart's chattering orbits near 9-10.3, 66-67,
 #: 110-111 Hz)
-SLOW_STEPS, SLOW_DS, SLOW_FAILS = 30, 0.2, 6
+SLOW_STEPS, SLOW_DS, SLOW_FAILS = 20, 0.2, 5
 CODIM2 = ("cusp", "fold-flip", "fold-grazing", "flip-grazing", "neimark-sacker-grazing")
 
 
