@@ -15,6 +15,9 @@ found; the grid needs the largest K, at the measured CPU cost of one diagram eac
     python benchmarks/stability_chart.py            (chart + grid estimate; saves
                                                      figures/stability_chart_paper.png/.h5)
     python benchmarks/stability_chart.py --plot     (redraw the figure from the .h5)
+    python benchmarks/stability_chart.py --curves   (the curves only, nothing saved: where
+                                                     their shooting evaluations go, by trace
+                                                     end and by use; the codim-2 points)
 """
 import os
 import sys
@@ -108,8 +111,97 @@ def main():
     figure(chart)
 
 
+def curves_only():
+    """The curves of the chart (diagram given, no labels), with the shooting evaluations of
+    each trace direction tallied by use: the start, corrector calls of accepted steps and of
+    failed ones (a ConvergenceError: the step is halved), codimension-2 location (_locate),
+    the rest (Jacobians after a fallback, rephasing, border renewals, error estimates)."""
+    import collections
+
+    from continuation import curve as CU
+
+    uses = collections.Counter()
+    traces = []  # (end, evaluations, impacts-per-period values on the points, kind, order)
+    corr, trace, locate = CU._Tracer.correct, CU._Tracer.trace, CU._locate
+    where = []  # the innermost tallied caller
+
+    def t_correct(self, *a, **k):
+        n0 = self.s.n_evaluations
+        ok = False
+        try:
+            out = corr(self, *a, **k)
+            ok = True
+            return out
+        finally:
+            use = where[-1] if where else "other"
+            if use == "trace":
+                use = "step accepted" if ok else "step failed"
+            uses[use] += self.s.n_evaluations - n0
+
+    def t_trace(self, p0, on_step):
+        n0 = self.s.n_evaluations
+        where.append("trace")
+        try:
+            pts, why = trace(self, p0, on_step)
+        finally:
+            where.pop()
+        traces.append((why, self.s.n_evaluations - n0,
+                       sorted({int(p.st.n_impacts) for p in [p0] + pts}), self.s.kind,
+                       self.s.order))
+        return pts, why
+
+    def t_locate(tr, *a, **k):
+        where.append("codim-2 location")
+        try:
+            return locate(tr, *a, **k)
+        finally:
+            where.pop()
+
+    CU._Tracer.correct, CU._Tracer.trace, CU._locate = t_correct, t_trace, t_locate
+    m = nlbeam.BeamImpact()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", C.ContinuationWarning)
+        C.periodic_solution(m, A_REF, 40.0, error=False)  # warm the JIT cache
+        t = time.process_time()
+        frc = C.frequency_response(m, A_REF, F_RANGE, (1, 2, 3), accuracy="off")
+        t_diag = time.process_time() - t
+        t = time.process_time()
+        chart = C.stability_chart(m, P_RANGE, F_RANGE, (1, 2, 3), diagram=frc,
+                                  label_grid=(0, 0))
+        t_curves = time.process_time() - t
+    n_ev = chart.n_evaluations
+    print(f"reference diagram: {len(frc.bifurcations)} bifurcations, {t_diag:.1f} s CPU")
+    print(f"curves: {len(chart.curves)}, {sum(len(c.frequency) for c in chart.curves)} points, "
+          f"{n_ev} shooting evaluations, {t_curves:.1f} s CPU; not traced or in part: "
+          f"{len(chart.skipped)}")
+    ends = collections.defaultdict(lambda: [0, 0])
+    for why, ev, *_ in traces:
+        ends[why.split(":")[0]][0] += 1  # 'corrector-limited: where' by its kind
+        ends[why.split(":")[0]][1] += ev
+    print("trace directions by end (directions, evaluations):")
+    for why, (k, ev) in sorted(ends.items(), key=lambda kv: -kv[1][1]):
+        print(f"  {why:28s} {k:4d} {ev:7d} ({100 * ev / max(n_ev, 1):.0f} %)")
+    budget = [t for t in traces if t[0] == "max_evaluations"]
+    for label, sel in (("one impacts-per-period value", [t for t in budget if len(t[2]) == 1]),
+                       ("several values", [t for t in budget if len(t[2]) > 1])):
+        kinds = collections.Counter(t[3] for t in sel)
+        print(f"  at the budget, {label}: {len(sel)} directions, "
+              f"{sum(t[1] for t in sel)} evaluations ({dict(kinds)})")
+    uses["outside corrector calls"] = n_ev - sum(uses.values())
+    print("evaluations by use: " + ", ".join(
+        f"{k} {v} ({100 * v / max(n_ev, 1):.0f} %)" for k, v in uses.most_common()))
+    sp = sorted(((s.kind, s.frequency, s.value, c.kind, c.order) for c in chart.curves
+                 for s in c.special), key=lambda s: (s[1], s[2]))
+    print(f"codimension-2 points: {len(sp)} "
+          f"{dict(collections.Counter(s[0] for s in sp))}")
+    for kind, f, v, ck, co in sp:
+        print(f"  {kind:14s} {f:10.5f} Hz {v * 1e3:8.5f} mm   on the {ck} curve, order {co}")
+
+
 if __name__ == "__main__":
-    if "--plot" in sys.argv:
+    if "--curves" in sys.argv:
+        curves_only()
+    elif "--plot" in sys.argv:
         figure(C.load_curves(H5))
     else:
         main()

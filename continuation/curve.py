@@ -27,6 +27,15 @@ from .shooting import Integrator
 #: steps accepted in a row after which the extended system's test-function row over the states
 #: is again taken from one evaluation (CurveSystem.row_from_one; _Tracer.trace)
 SMOOTH_STEPS = 10
+#: a trace ends 'corrector-limited' when over its last SLOW_STEPS accepted steps the mean step
+#: stayed below SLOW_DS of the first step and the corrector failed at least SLOW_FAILS times,
+#: SLOW_FAILS // 2 of them in the last SLOW_STEPS // 3 steps (not a step growing again after a
+#: sharp turn such as a cusp), while the tangent's part in the (log f, q) plane is at least
+#: half its largest over those steps (not turning out of the plane: the approach to a cusp or
+#: a turn, where steps are short too) (_Tracer.trace): a stretch where the extended system is
+#: not smooth at the step's scale (the paper chart's chattering orbits near 9-10.3, 66-67,
+#: 110-111 Hz)
+SLOW_STEPS, SLOW_DS, SLOW_FAILS = 20, 0.2, 5
 CODIM2 = ("cusp", "fold-flip", "fold-grazing", "flip-grazing", "neimark-sacker-grazing")
 
 
@@ -68,7 +77,7 @@ class BifurcationCurve:
     special: the Codim2 points met;
     ends: why the trace stopped at the first and the last point ('left the frequency range',
     'left the parameter range', 'closed', 'step underflow', 'max_points',
-    'max_evaluations');
+    'max_evaluations', 'corrector-limited: ...' (SLOW_STEPS; the message gives where));
     n_evaluations: shooting evaluations; wall_time (s)."""
 
     kind: str
@@ -307,6 +316,13 @@ class _Tracer:
         # unknowns by ds): its state within twice that
         return float(np.max(np.abs(near.state0 - p0.state0))) <= (2 * ds + 1e-3) * size
 
+    def _slow_end(self, pts, last):
+        """The end reason of a trace whose steps the corrector limits (SLOW_STEPS): where."""
+        f = [p.frequency for p in pts[-SLOW_STEPS:]]
+        v = [p.value for p in pts[-SLOW_STEPS:]]
+        return (f"corrector-limited: {sum(x[1] for x in last)} failures in {SLOW_STEPS} steps, "
+                f"{min(f):.6g}-{max(f):.6g} Hz, {self.s.parameter} {min(v):.4g}-{max(v):.4g}")
+
     def trace(self, p0, on_step):
         """Points from p0 (excluded) on, and the reason the trace stopped. on_step(a, b):
         called for each accepted step (codimension-2 detection). The predictor is the
@@ -327,6 +343,8 @@ class _Tracer:
         n0 = s.n_evaluations
         z_start = p0.st.z
         accepted = 0  # steps accepted since the last failure
+        slow = []  # per accepted step: (its step, corrector failures before it)
+        fails = 0
         s.row_from_one = True
         while True:
             if len(pts) >= self.max_points:
@@ -371,10 +389,21 @@ class _Tracer:
                 ds_fail = ds
                 ds *= 0.5
                 accepted = 0
+                fails += 1
                 if ds < self.ds_min:
                     return pts, "step underflow"
                 continue
             accepted += 1
+            # (step, failures before it, the tangent's length in the (log f, q) plane)
+            slow.append((ds, fails, la.norm(t[s.n:s.n + 2])))
+            fails = 0
+            if len(slow) >= SLOW_STEPS:
+                last = slow[-SLOW_STEPS:]
+                if (sum(v[0] for v in last) < SLOW_DS * self.ds0 * SLOW_STEPS
+                        and sum(v[1] for v in last) >= SLOW_FAILS
+                        and sum(v[1] for v in last[-(SLOW_STEPS // 3):]) >= SLOW_FAILS // 2
+                        and last[-1][2] >= 0.5 * max(v[2] for v in last)):
+                    return pts, self._slow_end(pts, last)
             if accepted >= SMOOTH_STEPS:
                 s.row_from_one = True
             b = self.make_point(st, t)
@@ -665,7 +694,8 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
     cusp, fold-flip, a curve meeting a grazing curve, i.e. the number of impacts per period
     changes along it) are in ``special``. Returns a BifurcationCurve; a ContinuationWarning
     says where a trace stopped short of the ranges (step underflow, max_points,
-    max_evaluations); a start that does not converge raises ConvergenceError.
+    max_evaluations, corrector-limited: short steps with repeated corrector failures, e.g. a
+    chattering stretch, SLOW_STEPS); a start that does not converge raises ConvergenceError.
     """
     t_wall = time.perf_counter()
     integrator = integrator or Integrator(**integrator_kw)
@@ -745,11 +775,16 @@ def bifurcation_curve(model, bifurcation, p_range, *, amplitude=None, parameter=
         pts = [halves[0][0]] + halves[0][1]
         pts_start = halves[0][0]
         ends = (ends[0], ends[0]) if ends[0] == "closed" else ("start", ends[0])
-    stuck = [e for e in ends if e in ("step underflow", "max_points", "max_evaluations")]
+    stuck = [e for e in ends if e in ("step underflow", "max_points", "max_evaluations")
+             or e.startswith("corrector-limited")]
     if stuck:
         warnings.warn(f"bifurcation_curve: the {kind} curve (order {order}) from "
-                      f"{f0:.6g} Hz stopped short of the ranges ({', '.join(stuck)}): try a "
-                      "smaller ds_max or more max_points, or segments=4 (multiple shooting)",
+                      f"{f0:.6g} Hz stopped short of the ranges ({'; '.join(stuck)}): try a "
+                      "smaller ds_max or more max_points, or segments=4 (multiple shooting)"
+                      + ("; a corrector-limited stretch (chattering orbits: the extended system "
+                         "is not smooth there) is ended on purpose: a smaller dt_scale or "
+                         "another start beyond it" if any(e.startswith("corrector-limited")
+                                                          for e in stuck) else ""),
                       ContinuationWarning, stacklevel=2)
     f = np.array([p.frequency for p in pts])
     v = np.array([p.value for p in pts])

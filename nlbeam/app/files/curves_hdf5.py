@@ -39,7 +39,7 @@ def _write_curve(g, c):
     g.attrs["kind"] = c.kind
     g.attrs["order"] = c.order
     g.attrs["parameter"] = c.parameter
-    g.attrs["ends"] = np.array([str(e) for e in c.ends], dtype="S64")
+    g.attrs["ends"] = np.array([str(e) for e in c.ends], dtype="S")  # no limit: ends name stretches
     g.attrs["f_range"] = np.asarray(c.f_range, dtype=float)
     g.attrs["p_range"] = np.asarray(c.p_range, dtype=float)
     g.attrs["n_evaluations"] = c.n_evaluations
