@@ -10,9 +10,9 @@ multipliers of sampled branch points against converged values.
 --reference FILE: the refined values are read from FILE (.npz) when it exists, else computed
 and written there (the diagram at accuracy='off' decides them: reuse a file only for code
 that traces the same diagram). --multipliers: for each accuracy level after the first that
-is not 'off', every ``--every``-th point of every branch (104 points at 15) is solved again
-from its state at dt / 16 with 512 steps per contact (the converged reference of
-tests/continuation/test_accuracy.py) and the reported multipliers are compared with it
+is not 'off', every ``--every``-th point of every branch (126 points at 15) is solved again
+from its stored orbit (its own shooting problem and steps per period) at dt / 16 with 512
+steps per contact (level 4: the converged reference of tests/continuation/test_accuracy.py) and the reported multipliers are compared with it
 (true error: largest |mu - mu_ref| / max(1, |mu_ref|)) and with their stated error.
 
 Printed per accuracy level: a summary line, then every fold / PD below 6 true significant
@@ -33,31 +33,40 @@ import nlbeam
 
 import continuation as C
 from continuation._newton import ConvergenceError
-from continuation.accuracy import match_multipliers
+from continuation.accuracy import _branch_problem, at_level, match_multipliers
 from continuation.shooting import Integrator
 
 A = 1e-4
 F_RANGE = (5.0, 150.0)
 ORDERS = (1, 2, 3)
-FINE = Integrator(dt_scale=1 / 16, steps_per_contact=512)
+FINE_LEVEL = 4  # the reference: level 4 of the default, dt / 16 and 512 steps per contact
 
 
 def reference(model, path=None):
-    """(kind, order, value, tolerance) of refine_bifurcations on the diagram without
-    estimates; read from / written to ``path`` (.npz) if given."""
+    """One record per fold / PD of the diagram without estimates: (kind, order, branch,
+    diagram frequency, refine_bifurcations' value or NaN where it failed, its tolerance);
+    read from / written to ``path`` (.npz) if given. The diagrams at every accuracy have the
+    same bifurcations (the estimates run after the trace), so a bifurcation is matched to
+    its own refined value by kind, order, branch and the nearest diagram frequency."""
+    keys = ("kind", "order", "branch", "diagram", "value", "tolerance")
     if path and os.path.exists(path):
         z = np.load(path)
-        return [(str(k), int(o), float(v), float(t))
-                for k, o, v, t in zip(z["kind"], z["order"], z["value"], z["tolerance"])]
+        if all(k in z for k in keys):
+            return list(zip(*(z[k].tolist() for k in keys)))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         frc = C.frequency_response(model, A, F_RANGE, orders=ORDERS, accuracy="off")
         C.refine_bifurcations(frc, model)
-    ref = [(b.kind, b.order, b.refined.value, b.refined.tolerance)
-           for b in frc.bifurcations if getattr(b, "refined", None) is not None]
+    ref = []
+    for b in frc.bifurcations:
+        if b.kind not in ("fold", "period-doubling") or not b.smooth:
+            continue
+        r = getattr(b, "refined", None)
+        ref.append((b.kind, b.order, b.branch, b.frequency,
+                    r.value if r is not None else np.nan,
+                    r.tolerance if r is not None else np.nan))
     if path:
-        np.savez(path, kind=np.array([r[0] for r in ref]), order=np.array([r[1] for r in ref]),
-                 value=np.array([r[2] for r in ref]), tolerance=np.array([r[3] for r in ref]))
+        np.savez(path, **{k: np.array([r[i] for r in ref]) for i, k in enumerate(keys)})
     return ref
 
 
@@ -75,7 +84,7 @@ def why(bf):
 def frequency_digits(frc, ref, acc):
     """Compare the diagram's folds / PDs with the refined values; print the summary and the
     list of poor points. Returns (true digits, stated digits) arrays."""
-    true_d, stated_d, under, nan, at_grazing, listed = [], [], 0, 0, 0, []
+    true_d, stated_d, under, nan, at_grazing, no_ref, listed = [], [], 0, 0, 0, 0, []
     for bf in frc.bifurcations:
         if bf.kind not in ("fold", "period-doubling"):
             continue
@@ -88,13 +97,19 @@ def frequency_digits(frc, ref, acc):
             nan += 1
             listed.append((bf, np.nan, "not confirmed (error NaN): " + why(bf)))
             continue
-        cands = [r for r in ref if r[0] == bf.kind and r[1] == bf.order]
+        cands = [r for r in ref if r[:3] == (bf.kind, bf.order, bf.branch)]
         if not cands:
             continue
-        _, _, v, tol = min(cands, key=lambda r: abs(r[2] - bf.frequency))
-        e = abs(v - bf.frequency)
-        if e > 1e-3 * bf.frequency:
+        _, _, _, f0, v, tol = min(cands, key=lambda r: abs(r[3] - bf.frequency))
+        if abs(f0 - bf.frequency) > 1e-3 * bf.frequency:
             continue  # not the same point
+        if not np.isfinite(v):
+            no_ref += 1
+            if acc != "off":
+                listed.append((bf, np.nan, "refine_bifurcations failed here: not compared; "
+                               + why(bf)))
+            continue
+        e = abs(v - bf.frequency)
         digits = -np.log10(max(e, tol) / bf.frequency)
         true_d.append(digits)
         bad = bool(np.isfinite(bf.error) and e > bf.error + tol)
@@ -108,7 +123,8 @@ def frequency_digits(frc, ref, acc):
           f"{int(np.sum(np.array(true_d) < 8))}); stated digits "
           + (f"{st.min():.1f}-{st.max():.1f} median {np.median(st):.1f} (>= 6: "
              f"{int(np.sum(st >= 6))}, >= 8: {int(np.sum(st >= 8))})" if st.size else "-")
-          + f"; not confirmed (error NaN) {nan}; true error > stated {under}; "
+          + f"; not confirmed (error NaN) {nan}; true error > stated {under}; no refined "
+          f"value {no_ref}; "
           f"{at_grazing} more at grazing points (not compared)")
     for bf, digits, text in sorted(listed, key=lambda x: x[0].frequency):
         print(f"    {bf.kind:15s} order {bf.order} {bf.frequency:.10g} Hz +- {bf.error:.1e}: "
@@ -125,8 +141,10 @@ def multiplier_errors(model, frc, every):
         for i in range(0, len(b.values), every):
             f = float(b.frequency[i])
             try:
-                ref = C.periodic_solution(model, A, f, b.order, guess=b.state0[i],
-                                          integrator=FINE, error=False).multipliers
+                prob, u, p = _branch_problem(model, b, i, Integrator())
+                fine = at_level(prob, FINE_LEVEL)
+                _, ev, _, _ = fine.solve(u, p, tol=1e-10, max_iter=12)
+                ref = fine.multipliers(ev.Ms)
             except (ConvergenceError, nlbeam.IntegrationError, ValueError):
                 rows.append((f, b.order, bi, np.nan, float(b.multipliers_error[i])))
                 continue

@@ -1,10 +1,17 @@
-"""The impact-change floor of accuracy.branch_errors: where the number of impacts per period
+"""Rules of continuation.accuracy's error estimates.
+
+The impact-change floor of accuracy.branch_errors: where the number of impacts per period
 changes between two levels of a branch point (the finer level follows another orbit class,
 as in the paper model's chattering stretches), the stated multiplier error is at least the
 change across it and nothing is extrapolated. Run on a real branch (a 1-DOF oscillator with
 a one-sided linear stop, impacting) with the real refined orbits: only the impact count
 reported for the finer levels is shifted, so the expected numbers follow from the
-multipliers per level recorded in the same run."""
+multipliers per level recorded in the same run.
+
+accuracy.combine on a bifurcation's values per level that are not yet asymptotic (a second
+order term under the fourth order one, as at the paper diagram's order-2 fold / PD at
+66.43 Hz, where one observed ratio of 13-17 looked clean): the stated error still bounds the
+finest value's true error."""
 import warnings
 
 import numpy as np
@@ -13,6 +20,7 @@ import pytest
 import continuation as C
 import nlbeam
 from continuation import accuracy as acc
+from continuation.accuracy import combine
 from continuation.shooting import Integrator
 
 K1, C1, GAP = 39.48, 0.2513, 0.1
@@ -84,3 +92,23 @@ def test_an_impact_change_makes_the_error_at_least_the_change_across_it(branch, 
         n_floor_binds += bool(me0[i] < d1 and me1[i] == pytest.approx(d1, rel=1e-12))
     # the floor decides the stated error somewhere (else this test could not fail)
     assert n_floor_binds >= 1, (me0[idx], me1[idx])
+
+
+def test_one_observed_ratio_is_not_trusted_as_the_order():
+    """v_k = v* + c4 h^4 + c2 h^2 (h = 2^-k) at levels 0..2: the ratio of the two changes is
+    14.6 (it looks like order 4), but the h^2 term dominates the error of the finest level;
+    Roache's factor 1.25 would state 6.1e-6 against a true 6.4e-6, the factor 3 for an order
+    seen once covers it. With a third change (two ratios) the extrapolant and its error
+    bound the truth as well; and no convergence pattern states the larger of the last two
+    changes."""
+    v_star, c4, c2 = 1.0, 1e-3, 4e-5
+    h = 2.0 ** -np.arange(5)
+    v = v_star + c4 * h ** 4 + c2 * h ** 2
+    for K in (2, 3, 4):
+        value, err = combine(v[:K + 1], floor=0.0)
+        assert abs(value - v_star) <= err, (K, value - v_star, err)
+        assert err <= abs(v[K] - v[K - 1])  # not vacuous: below the last change
+    d = np.diff(v[:3])
+    assert 1.25 * abs(d[1]) / (d[0] / d[1] - 1.0) < abs(v[2] - v_star)  # 1.25 would fail
+    value, err = combine([1.0, 1.0 + 3.8e-7, 1.0 + 1.5e-4], floor=0.0)  # 67.58 Hz's pattern
+    assert value == 1.0 + 1.5e-4 and err == pytest.approx(1.5e-4 - 3.8e-7)
