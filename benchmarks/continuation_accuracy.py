@@ -6,14 +6,19 @@ multipliers of sampled branch points against converged values.
 
     python benchmarks/continuation_accuracy.py [off default high 7 ...] [--reference FILE]
         [--multipliers] [--every 15]
+    python benchmarks/continuation_accuracy.py --levels 67.5837 66.4312 ...
 
 --reference FILE: the refined values are read from FILE (.npz) when it exists, else computed
 and written there (the diagram at accuracy='off' decides them: reuse a file only for code
 that traces the same diagram). --multipliers: for each accuracy level after the first that
 is not 'off', every ``--every``-th point of every branch (126 points at 15) is solved again
 from its stored orbit (its own shooting problem and steps per period) at dt / 16 with 512
-steps per contact (level 4: the converged reference of tests/continuation/test_accuracy.py) and the reported multipliers are compared with it
-(true error: largest |mu - mu_ref| / max(1, |mu_ref|)) and with their stated error.
+steps per contact (level 4: the converged reference of tests/continuation/test_accuracy.py)
+and the reported multipliers are compared with it (true error: largest |mu - mu_ref| /
+max(1, |mu_ref|)) and with their stated error.
+
+--levels F ...: the folds / PDs of the diagram without estimates within 2e-3 Hz of each F,
+located at levels 0-4 (digits 12, so that no level is skipped): how their values converge.
 
 Printed per accuracy level: a summary line, then every fold / PD below 6 true significant
 digits, above its stated error, or not confirmed (error NaN), with its frequency, order,
@@ -165,15 +170,35 @@ def multiplier_errors(model, frc, every):
                   f"{stated:.1e}" + ("  TRUE > STATED" if true > stated else ""))
 
 
+def show_levels(model, freqs):
+    """The levels 0-4 of the folds / PDs near ``freqs`` (Hz) on the diagram without estimates."""
+    from continuation.accuracy import bifurcation_levels
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        frc = C.frequency_response(model, A, F_RANGE, orders=ORDERS, accuracy="off")
+        for bf in frc.bifurcations:
+            if (bf.kind not in ("fold", "period-doubling") or not bf.smooth
+                    or not any(abs(bf.frequency - f) < 2e-3 for f in freqs)):
+                continue
+            lv = bifurcation_levels(model, A, bf, Integrator(), digits=12.0, max_levels=4)
+            print(f"{bf.kind} order {bf.order} branch {bf.branch + 1} {bf.frequency:.10g} Hz: "
+                  "levels " + " ".join(f"{v:.10g}" for v in lv.values)
+                  + f" -> {lv.value:.10g} +- {lv.error:.1e} {lv.failed}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("levels", nargs="*", default=["off", "default", "high"])
     ap.add_argument("--reference", default=None, help="cache of the refined values (.npz)")
     ap.add_argument("--multipliers", action="store_true")
     ap.add_argument("--every", type=int, default=15)
+    ap.add_argument("--levels", dest="locate", type=float, nargs="+", default=None)
     args = ap.parse_args(argv)
     model = nlbeam.BeamImpact.paper()
     C.periodic_solution(model, A, 44.0)  # JIT warm-up
+    if args.locate:
+        return show_levels(model, args.locate)
     t = time.process_time()
     ref = reference(model, args.reference)
     print(f"reference: {len(ref)} folds / PDs refined ({time.process_time() - t:.0f} s CPU)")
