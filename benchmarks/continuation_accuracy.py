@@ -201,7 +201,8 @@ def main(argv=None):
         return show_levels(model, args.locate)
     t = time.process_time()
     ref = reference(model, args.reference)
-    print(f"reference: {len(ref)} folds / PDs refined ({time.process_time() - t:.0f} s CPU)")
+    print(f"reference: {sum(np.isfinite(r[4]) for r in ref)} of {len(ref)} folds / PDs "
+          f"refined ({time.process_time() - t:.0f} s CPU)")
     mult_done = False
     for acc in args.levels:
         a = acc if acc in ("off", "default", "high") else float(acc)
