@@ -35,12 +35,13 @@ monodromy, so it is the fold of the discrete map even where the variational mono
 located at level 0 too), grazing points by bisection on the number of impacts per period
 (level 0 too, where the diagram's bracket is wide). ``combine`` turns the values per level
 into the reported value and its stated error: the finest value, error half the last change
-with one finer level (order >= 1.6 assumed), 1.25 |d| / (r - 1) with the observed ratio r of
+with one finer level (order >= 1.6 assumed), 3 |d| / (r - 1) with the observed ratio r of
 successive changes (Roache's grid convergence index) when it shows clean convergence (3-40);
 with two clean ratios (four levels) the Richardson extrapolant, error the change of the
-extrapolant; never below 2e-9 relative (the solves' own resolution). Levels are added until
-the stated error meets the target (``accuracy``: 6 significant digits by default, 8 with
-'high'). ``estimate_diagram`` does all of this for a FrequencyResponse.
+extrapolant; else the larger of the last two changes; never below 2e-9 relative (the solves'
+own resolution). Levels are added until the stated error meets the target (``accuracy``: 6
+significant digits by default, 8 with 'high') and two changes are seen (``MIN_VALUES``).
+``estimate_diagram`` does all of this for a FrequencyResponse.
 """
 from __future__ import annotations
 
@@ -58,6 +59,12 @@ from ._newton import ConvergenceError
 from .shooting import ShootingProblem, _problem_from_state
 
 SAFETY = 2.0  # error of a level-0 value = SAFETY * |level 0 - level 1| (a bound for order >= 1)
+# a bifurcation is located at levels until it has at least this many values (two changes):
+# one change alone shows no convergence (paper diagram, order-2 PD at 67.58372 Hz next to a
+# fold and a corner: the diagram's value and level 1 agree to 3.8e-7 Hz, level 2 moves it by
+# 1.5e-4 Hz); where ``max_levels`` allows (grazing points: one level)
+MIN_VALUES = 3
+GCI_SAFETY = 3.0  # Roache's factor of safety for an observed order not confirmed by a second
 ACCURACY = {"default": 6.0, "high": 8.0}
 STAGNATION_FROM = 5  # _on_normal gives up from this iterate on where the residual stagnates
 KINDS_LOCATED = ("fold", "period-doubling", "neimark-sacker", "grazing")
@@ -431,8 +438,11 @@ def combine(values, floor=2e-9):
     the previous), d_k = v_k - v_(k-1), r_k = d_(k-1) / d_k; a ratio is clean when 3 <= r <= 40
     (convergence of order 1.6-5.3). K >= 3 with the last two ratios clean: the Richardson
     extrapolant E_K = v_K + d_K / (r_K - 1), error |E_K - E_(K-1)|. Else the finest value
-    v_K: with the last ratio clean, error 1.25 |d_K| / (r_K - 1) (Roache's grid convergence
-    index); K = 1, error |d_1| / 2 (order >= 1.6 assumed); otherwise |d_K|. Never below
+    v_K: with the last ratio clean, error GCI_SAFETY |d_K| / (r_K - 1) (Roache's grid
+    convergence index with his factor 3 for an order observed once, not confirmed); K = 1,
+    error |d_1| / 2 (order >= 1.6 assumed); otherwise the larger of |d_K| and |d_(K-1)|
+    (paper diagram, order-2 PD at 67.5837 Hz next to a fold and a corner: changes 3.8e-7,
+    1.5e-4, -1.4e-5, -7e-6). Never below
     ``floor`` |value| (the solves' own resolution)."""
     v = np.asarray(values, dtype=float)
     if len(v) < 2:
@@ -445,11 +455,13 @@ def combine(values, floor=2e-9):
         e_prev = v[-2] + d[-2] / (r[-2] - 1.0)
         value, error = float(e_k), abs(e_k - e_prev)
     elif r and clean[-1]:
-        value, error = float(v[-1]), 1.25 * abs(d[-1]) / (r[-1] - 1.0)
+        value, error = float(v[-1]), GCI_SAFETY * abs(d[-1]) / (r[-1] - 1.0)
     elif len(d) >= 2 and d[-1] == 0.0:  # no change at the last level
         value, error = float(v[-1]), abs(d[-2]) / 8.0
+    elif len(d) >= 2:  # no convergence pattern: the larger of the last two changes
+        value, error = float(v[-1]), max(abs(d[-1]), abs(d[-2]))
     else:
-        value, error = float(v[-1]), abs(d[-1]) * (0.5 if len(d) == 1 else 1.0)
+        value, error = float(v[-1]), 0.5 * abs(d[-1])
     return value, float(max(error, floor * abs(value)))
 
 
@@ -480,7 +492,8 @@ def bifurcation_levels(model, amplitude, bif, integrator, *, parameter="frequenc
                        max_levels=4, segments=1):
     """Locate the bifurcation ``bif`` (a continuation.Bifurcation of a diagram computed with
     ``integrator``) at levels 1, 2, ... until the stated error is at most 10^-digits |value|
-    (at least one level, at most ``max_levels``); folds of a diagram without stability, and
+    (at least three values, two changes, where ``max_levels`` allows: MIN_VALUES; at most
+    ``max_levels``); folds of a diagram without stability, and
     folds and grazing points whose bracket is wider than half the target, at level 0 too
     (their diagram values come from another criterion or a wider bracket; see
     _RELOCATE_LEVEL0); one reported at a grazing point (``smooth`` False) as a grazing
@@ -520,7 +533,8 @@ def bifurcation_levels(model, amplitude, bif, integrator, *, parameter="frequenc
             continue
         value, error = combine(values)
         error = max(error, half)
-        if error <= 10.0 ** -digits * abs(value):
+        if error <= 10.0 ** -digits * abs(value) and len(values) >= min(MIN_VALUES,
+                                                                         max_levels + 1):
             break
         width = max(abs(values[-1] - values[-2]), 0.5 * 10.0 ** -digits * abs(p))
     if len(values) < 2:
