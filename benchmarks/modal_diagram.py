@@ -6,7 +6,7 @@ K = 2.1e8 N/m^1.5, e = 0.5), A = 0.1 mm, 5-150 Hz, orders 1 and 2, n_grid 20. Un
     python benchmarks/modal_diagram.py steps [--freqs 5.5,8,12.5,27,40,48] [--scales 1,2,4,8]
     python benchmarks/modal_diagram.py flows
     python benchmarks/modal_diagram.py diagram [--out modal4.h5] [--accuracy off]
-    python benchmarks/modal_diagram.py branch [--freq 5.9] [--debug]
+    python benchmarks/modal_diagram.py branch [--freq 5.9] [--debug] [--scene] [--range 5,8]
 
 - ``steps``: periodic orbits (order 1, found by integration to the steady state) solved at the
   default free-flight step times dt_scale (steps_per_contact 32 throughout) against the orbit at
@@ -15,12 +15,15 @@ K = 2.1e8 N/m^1.5, e = 0.5), A = 0.1 mm, 5-150 Hz, orders 1 and 2, n_grid 20. Un
 - ``flows``: CPU of one period's flow with and without the variational equations (monodromy)
   at dt_scale 1, 2, 4, with the steps taken and the impacts per period.
 - ``branch``: the order-1 branch through the steady state at --freq, traced alone both
-  ways (with --debug: every corrector iterate and step).
-- ``diagram``: the whole diagram with a progress line per branch (CPU seconds of this process
-  in brackets); at the end the CPU per stage (brute-force grid, branches, error estimates),
-  the CPU of the branches by how they ended, the flows the tracer asked for (per half-branch
-  end reason, with those spent after the half's last point: what giving up cost), and the
-  diagram's warnings. --accuracy: as the scene says (figures/modal_beam.toml: "off", no error
+  ways (with --debug: every corrector iterate and step; with --scene: the scene's
+  path-follower options, else frequency_response's defaults).
+- ``diagram``: the whole diagram, with the path-follower options the scene's [periodic] sets
+  (ds, ds_max, max_angle, max_points, tol, bif_tol), with a progress line per branch (CPU
+  seconds of this process in brackets); at the end the CPU per stage (brute-force grid,
+  branches, error estimates), the CPU of the branches by how they ended, the flows the tracer
+  asked for (per half-branch end reason, with those spent after the half's last point: what
+  giving up cost), the far-side results taken from the per-point memo, and the diagram's
+  warnings. --accuracy: as the scene says (figures/modal_beam.toml: "off", no error
   estimates; "default" for the estimates as well).
 
 Measured on main 97c7b7d (2026-11-24, 2 cores at load ~10, one run under cProfile, fresh
@@ -33,7 +36,9 @@ costs 3-6 times one without; below 15 Hz most steps are inside the long contacts
 import argparse
 import re
 import time
+import tomllib
 import warnings
+from pathlib import Path
 
 import numpy as np
 
@@ -45,6 +50,18 @@ AMPLITUDE, F_RANGE, ORDERS, N_GRID = 1e-4, (5.0, 150.0), (1, 2), 20
 GAVE_UP = ("stuck at a corner", "step underflow", "no progress", "max_points",
            "could not move the segment boundaries")  # (continuation.diagram._GAVE_UP)
 JUMP = "discontinuous map"
+
+
+SCENE = Path(__file__).resolve().parents[1] / "figures" / "modal_beam.toml"
+TRACE_KEYS = ("ds", "ds_max", "max_angle", "max_points", "tol", "bif_tol")
+
+
+def scene_trace_options():
+    """The path follower's options the scene's [periodic] sets (figures/modal_beam.toml), so
+    that ``diagram`` measures what ``nlbeam figures`` runs."""
+    with open(SCENE, "rb") as fh:
+        periodic = tomllib.load(fh)["periodic"]
+    return {k: periodic[k] for k in TRACE_KEYS if k in periodic}
 
 
 def model():
@@ -136,7 +153,7 @@ def diagram(out=None, accuracy="off"):
         warnings.simplefilter("always")
         frc = continuation.frequency_response(model(), AMPLITUDE, F_RANGE, orders=ORDERS,
                                               n_grid=N_GRID, progress=progress,
-                                              accuracy=accuracy)
+                                              accuracy=accuracy, **scene_trace_options())
     total = time.process_time() - t0
     Tracer.__init__, Tracer.trace = init, trace
     stamps = [(float(re.match(r"\[\s*([\d.]+)\]", s).group(1)), s) for s in log]
@@ -153,6 +170,7 @@ def diagram(out=None, accuracy="off"):
         n, c = by_end.get(key, (0, 0.0))
         by_end[key] = (n + 1, c + t - prev)
         prev = t
+    print(f"scene options (figures/modal_beam.toml): {scene_trace_options()}")
     print(f"CPU {total:.1f} s: brute-force grid {grid:.1f} s (with any kernel compile), "
           f"branches {last_branch - grid:.1f} s, error estimates {total - last_branch:.1f} s")
     for key, (n, c) in by_end.items():
@@ -173,15 +191,19 @@ def diagram(out=None, accuracy="off"):
         frc.save(out)
 
 
-def branch(f, debug=False):
+def branch(f, debug=False, scene=False, f_range=F_RANGE):
     """The order-1 branch through the steady state at f (Hz), traced alone both ways as the
-    diagram's gap seeds are: points, flows (after each half's last point), end reasons, CPU."""
+    diagram's gap seeds are: points, flows (after each half's last point), end reasons, CPU.
+    scene: with the path follower's options of the scene's [periodic] (else
+    frequency_response's defaults)."""
     from continuation import diagram as D
     from continuation.pathfollow import Tracer
 
     m, integ = model(), continuation.Integrator()
-    tr = Tracer(p_min=F_RANGE[0], p_max=F_RANGE[1], ds=0.02, ds_max=0.5, max_angle=0.2,
-                max_points=1000, tol=1e-10, bif_tol=1e-8)  # (frequency_response's defaults)
+    opts = dict(ds=0.02, ds_max=0.5, max_angle=0.2, max_points=1000, tol=1e-10, bif_tol=1e-8)
+    if scene:
+        opts.update(scene_trace_options())
+    tr = Tracer(p_min=f_range[0], p_max=f_range[1], **opts)
     tr.debug = debug
     s0 = D.steady_state(m, AMPLITUDE, f, integrator=integ)
     t0 = time.process_time()
@@ -196,7 +218,8 @@ def branch(f, debug=False):
             if reason.startswith("closed"):
                 break
             prior = tr.retrace.export()
-        print(f"from {p:.6g} Hz: {'; '.join(ends)}; {tr.n_evaluations} flows, "
+        print(f"from {p:.6g} Hz: {'; '.join(ends)}; {tr.n_evaluations} flows "
+              f"({getattr(tr, 'far_hits', 0)} far-side results from the memo), "
               f"{time.process_time() - t0:.1f} s CPU")
 
 
@@ -205,6 +228,9 @@ def main():
     ap.add_argument("what", choices=("steps", "flows", "diagram", "branch"))
     ap.add_argument("--freq", type=float, default=5.9, help="branch: its start (Hz)")
     ap.add_argument("--debug", action="store_true", help="branch: Tracer.debug")
+    ap.add_argument("--range", default=None, help="branch: lo,hi (Hz; default the scene's)")
+    ap.add_argument("--scene", action="store_true",
+                    help="branch: the scene's path-follower options (figures/modal_beam.toml)")
     ap.add_argument("--freqs", default="5.5,8,12.5,27,40,48")
     ap.add_argument("--scales", default="1,2,4,8")
     ap.add_argument("--out", default=None)
@@ -217,7 +243,8 @@ def main():
     elif a.what == "flows":
         flows()
     elif a.what == "branch":
-        branch(a.freq, a.debug)
+        branch(a.freq, a.debug, a.scene,
+               tuple(map(float, a.range.split(","))) if a.range else F_RANGE)
     else:
         diagram(a.out, a.accuracy)
 
