@@ -367,20 +367,27 @@ def _vertex_along(prob, z0, t, jp, delta, tol, s_tol=3e-6, max_iter=12):
                            f"{z0[-1] * prob.scale_p:.9g}")
 
 
-def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60):
+def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60, widen=True,
+                    expect=None, n_scan=8):
     """Grazing point of prob near p0: where the number of impacts per period changes, by
-    bisection in p between orbits solved at fixed p (the bracket is first widened from
-    ``width``, 4 times at each try, up to 2^11 ``width``, until its ends differ) down to a
-    width of ``resolution`` |p0|. Returns (the middle of the bracket, u at its end on p0's
-    side, half the bracket's width)."""
+    bisection in p between orbits solved at fixed p, down to a width of ``resolution`` |p0|.
+    The change is searched at p0 +- ``width`` first, then (``widen``) 4 times wider at each
+    try up to 2^11 ``width``; where it first shows at p0 +- d, the stretch beyond the last
+    width tried is scanned outward in at most ``n_scan`` steps and the first step whose
+    count differs is bisected: the change nearest p0, not any change the wide bracket holds.
+    expect: (impacts below, impacts above) of the change located at an earlier level; a
+    change between other numbers of impacts is another event (ConvergenceError), never
+    this one's estimate. Returns (the middle of the final bracket, u at its end on p0's side,
+    half the bracket's width, (impacts below, impacts above))."""
     def solve(u, p):
         u, ev, _, _ = prob.solve(u, p, tol=tol, max_iter=12)
         return u, ev.n_impacts
 
     u_mid, n_mid = solve(u0, p0)
     d = max(width, 1e-9 * abs(p0))
-    d_max = min(0.01 * abs(p0), 2.0 ** 11 * d)  # the widest bracket tried
+    d_max = min(0.01 * abs(p0), 2.0 ** 11 * d) if widen else d  # the widest bracket tried
     lo = hi = None
+    d_prev = 0.0
     while True:
         for s in (-1.0, 1.0):
             try:
@@ -388,14 +395,29 @@ def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60):
             except ConvergenceError:
                 continue
             if n_s != n_mid:
-                a, b = sorted([(p0, u_mid, n_mid), (p0 + s * d, u_s, n_s)], key=lambda x: x[0])
-                lo, hi = a, b
+                near = (p0, u_mid, n_mid)
+                # the first change outward from p0: scan the stretch not tried before
+                step = (d - d_prev) / max(1, min(n_scan, int(np.ceil((d - d_prev) / width))))
+                q = d_prev
+                while q + step < d * (1.0 - 1e-12):
+                    q += step
+                    try:
+                        u_q, n_q = solve(near[1], p0 + s * q)
+                    except ConvergenceError:
+                        continue
+                    if n_q != n_mid:
+                        u_s, n_s = u_q, n_q
+                        break
+                    near = (p0 + s * q, u_q, n_q)
+                else:
+                    q = d
+                lo, hi = sorted([near, (p0 + s * q, u_s, n_s)], key=lambda x: x[0])
                 break
         if lo is not None:
             break
         if d >= d_max:
             break
-        d = min(4.0 * d, d_max)
+        d_prev, d = d, min(4.0 * d, d_max)
     if lo is None:
         raise ConvergenceError(f"grazing: no change of the number of impacts near {p0:.9g}")
     for _ in range(max_iter):
@@ -412,15 +434,27 @@ def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60):
             hi = (pm, um, nm)
         else:  # a third impact count or no solution: stop at the bracket so far
             break
+    pair = (int(lo[2]), int(hi[2]))
+    if expect is not None and pair != tuple(expect):
+        raise ConvergenceError(
+            f"grazing: the change of impacts found near {0.5 * (lo[0] + hi[0]):.9g} "
+            f"({pair[0]} -> {pair[1]}) is not the one located before ({expect[0]} -> "
+            f"{expect[1]}): another change of the number of impacts")
     near = lo if lo[2] == n_mid else hi
-    return 0.5 * (lo[0] + hi[0]), near[1], 0.5 * (hi[0] - lo[0])
+    return 0.5 * (lo[0] + hi[0]), near[1], 0.5 * (hi[0] - lo[0]), pair
 
 
 def _locate(kind, prob, u, p, width, resolution, hint):
     """(p, u, half-width of the final bracket) of the bifurcation of this kind near p (hint:
     a dict carried from level to level)."""
     if kind == "grazing":
-        return _grazing_bisect(prob, u, p, width, resolution)
+        # a relocation at the diagram's own step stays inside the diagram's bracket; a finer
+        # level takes only the change between the same numbers of impacts (hint['impacts'])
+        p, u, half, pair = _grazing_bisect(prob, u, p, width, resolution,
+                                           widen=not hint.get("level0", False),
+                                           expect=hint.get("impacts"))
+        hint["impacts"], hint["level0"] = pair, False
+        return p, u, half
     if kind == "fold":
         return (*_fold_turning_point(prob, u, p, hint=hint), 0.0)
     return (*_secant_regular(prob, u, p, kind, hint), 0.0)
@@ -501,7 +535,7 @@ def bifurcation_levels(model, amplitude, bif, integrator, *, parameter="frequenc
     value, error = p, float("nan")
     failed = ""
     prob = u = None
-    hint = {}
+    hint = {"level0": relocate}  # (grazing: the level-0 search stays in the diagram's bracket)
     width = max(float(bif.tolerance) if math.isfinite(bif.tolerance) else 0.0,
                 0.5 * 10.0 ** -digits * abs(p))
     for k in range(0 if relocate else 1, max_levels + 1):

@@ -77,6 +77,17 @@ def _coverage(frc, order, tol):
     return out
 
 
+def _both_unresolved(a, b, order):
+    """The parts of the range that both diagrams declare unresolved for this order
+    (FrequencyResponse.unresolved: what their warnings tell the user), as (lo, hi)."""
+    out = []
+    for _, lo, hi, _ in a.unresolved(order):
+        for _, lo2, hi2, _ in b.unresolved(order):
+            if max(lo, lo2) <= min(hi, hi2):
+                out.append((max(lo, lo2), min(hi, hi2)))
+    return out
+
+
 def structure_differences(a, b, f_rel=2e-3, rel=1e-7):
     """What differs between the structures of diagrams a and b: branches (count per order,
     covered ranges, their ends within f_rel relative: a switched branch starts at its period
@@ -84,9 +95,17 @@ def structure_differences(a, b, f_rel=2e-3, rel=1e-7):
     matched in order of frequency within the sum of their stated errors, the errors the
     bifurcation table prints them with (``numbers.bifurcation_error``: the bracket, the
     estimated integration error, bif_tol, and 1e-5 of f at grazing points and at bifurcations
-    reported at one), plus ``rel`` relative: the round-off of the located point)."""
+    reported at one), plus ``rel`` relative: the round-off of the located point). Bifurcations
+    of an order inside a stretch that BOTH diagrams declare unresolved for that order
+    (``FrequencyResponse.unresolved``, named in each diagram's warning) are left out of the
+    comparison; a stretch only one of them declares is compared like any other."""
     from nlbeam.app.scenes.numbers import bifurcation_error
     diff = []
+    skip = {o: _both_unresolved(a, b, o)
+            for o in {x.order for x in a.bifurcations + b.bifurcations}}
+
+    def compared(x):
+        return not any(lo <= x.frequency <= hi for lo, hi in skip[x.order])
     orders = sorted({br.order for br in a.branches} | {br.order for br in b.branches})
     for o in orders:
         na = sum(br.order == o for br in a.branches)
@@ -98,9 +117,9 @@ def structure_differences(a, b, f_rel=2e-3, rel=1e-7):
             diff.append(f"order {o}: covers {ca} against {cb}")
     keys = sorted({(x.kind, x.order) for x in a.bifurcations + b.bifurcations})
     for key in keys:
-        xa = sorted((x for x in a.bifurcations if (x.kind, x.order) == key),
+        xa = sorted((x for x in a.bifurcations if (x.kind, x.order) == key and compared(x)),
                     key=lambda x: x.frequency)
-        xb = sorted((x for x in b.bifurcations if (x.kind, x.order) == key),
+        xb = sorted((x for x in b.bifurcations if (x.kind, x.order) == key and compared(x)),
                     key=lambda x: x.frequency)
         if len(xa) != len(xb):
             diff.append(f"{key}: {[round(x.frequency, 6) for x in xa]} against "
