@@ -367,6 +367,24 @@ def _vertex_along(prob, z0, t, jp, delta, tol, s_tol=3e-6, max_iter=12):
                            f"{z0[-1] * prob.scale_p:.9g}")
 
 
+def _one_change_in(solve, u0, n0, p0, dp, n_scan):
+    """Raise ConvergenceError unless the number of impacts changes once only on the way from
+    p0 (n0 impacts) to p0 + dp, sampled at n_scan equal steps (several changes within a
+    bracket: which one a bisection lands on is up to round-off)."""
+    counts, u = [n0], u0
+    for j in range(1, n_scan + 1):
+        try:
+            u, n = solve(u, p0 + dp * j / n_scan)
+        except ConvergenceError:
+            continue
+        counts.append(n)
+    k = sum(a != b for a, b in zip(counts[:-1], counts[1:]))
+    if k > 1:
+        raise ConvergenceError(
+            f"grazing: {k} changes of the number of impacts ({'/'.join(map(str, counts))}) "
+            f"between {p0:.9g} and {p0 + dp:.9g}: a cluster, located no closer than that")
+
+
 def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60, widen=True,
                     expect=None, n_scan=8):
     """Grazing point of prob near p0: where the number of impacts per period changes, by
@@ -377,8 +395,11 @@ def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60, wid
     count differs is bisected: the change nearest p0, not any change the wide bracket holds.
     expect: (impacts below, impacts above) of the change located at an earlier level; a
     change between other numbers of impacts is another event (ConvergenceError), never
-    this one's estimate. Returns (the middle of the final bracket, u at its end on p0's side,
-    half the bracket's width, (impacts below, impacts above))."""
+    this one's estimate. Without ``widen`` (the diagram's own bracket) a bracket in which the
+    number of impacts changes more than once (sampled at ``n_scan`` points) is a cluster:
+    ConvergenceError (the diagram's bracket is then the stated error). Returns (the middle of
+    the final bracket, u at its end on p0's side, half the bracket's width, (impacts below,
+    impacts above))."""
     def solve(u, p):
         u, ev, _, _ = prob.solve(u, p, tol=tol, max_iter=12)
         return u, ev.n_impacts
@@ -396,6 +417,8 @@ def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60, wid
                 continue
             if n_s != n_mid:
                 near = (p0, u_mid, n_mid)
+                if not widen:  # the diagram's own bracket: one change in it, or a cluster
+                    _one_change_in(solve, u_mid, n_mid, p0, s * d, n_scan)
                 # the first change outward from p0: scan the stretch not tried before
                 step = (d - d_prev) / max(1, min(n_scan, int(np.ceil((d - d_prev) / width))))
                 q = d_prev

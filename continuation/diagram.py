@@ -971,9 +971,10 @@ def _unresolved(branches, bifs, p_range):
 
 
 def _unresolved_text(stretches, unit):
-    return ("unresolved (the tracer gave up where the number of impacts changes often: "
-            "where the branch ends there, and which grazing points and bifurcations near its "
-            "end are listed, may differ with round-off): " + "; ".join(
+    return ("unresolved (around a branch end where the tracer gave up or the map jumps, "
+            "mostly where the number of impacts changes often: where the branch ends, and "
+            "which grazing points and bifurcations near its end are listed, may differ with "
+            "round-off): " + "; ".join(
                 f"order {o}: {a:.6g}-{c:.6g}{unit} ({what})" for o, a, c, what in stretches))
 
 
