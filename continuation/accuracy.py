@@ -998,8 +998,10 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=1, segments
                          f"step (error NaN): at {_short(f_)}")
     if bracketed:
         parts.append(f"{len(bracketed)} grazing point(s) or bifurcation(s) at one could not be "
-                     "located again by bisection at a fixed frequency (a fold at the corner?): "
-                     "their error is the width of the diagram's bracket: at "
+                     "located again by bisection at a fixed frequency (a fold at the corner, or "
+                     "several changes of the number of impacts in the bracket, or at the finer "
+                     "step only a change between other numbers of impacts nearby): their error "
+                     "is the width of the diagram's bracket: at "
                      + _short([f"{b.value:.9g} +- {b.error:.1e}" for b in bracketed]))
     if above:
         parts.append(f"{len(above)} fold/PD/NS point(s) with errors above the target after "
