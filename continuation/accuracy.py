@@ -386,7 +386,7 @@ def _one_change_in(solve, u0, n0, p0, dp, n_scan):
 
 
 def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60, widen=True,
-                    expect=None, n_scan=8):
+                    expect=None, n_scan=8, far=None):
     """Grazing point of prob near p0: where the number of impacts per period changes, by
     bisection in p between orbits solved at fixed p, down to a width of ``resolution`` |p0|.
     The change is searched at p0 +- ``width`` first, then (``widen``) 4 times wider at each
@@ -399,10 +399,14 @@ def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60, wid
     number of impacts changes more than once (sampled at ``n_scan`` points) is a cluster:
     ConvergenceError (the diagram's bracket is then the stated error). Returns (the middle of
     the final bracket, u at its end on p0's side, half the bracket's width, (impacts below,
-    impacts above))."""
+    impacts above)). far: the number of impacts on the grazing point's far side (the
+    diagram's point): counts are then classed as that number or another one, so that a count
+    flickering between two others next to the grazing point (chattering: 4 / 5 impacts below
+    the paper model's 6.648 Hz grazing point, 3 above) is one side, not a change."""
     def solve(u, p):
         u, ev, _, _ = prob.solve(u, p, tol=tol, max_iter=12)
-        return u, ev.n_impacts
+        n = ev.n_impacts
+        return u, (n if far is None else int(n == far))
 
     u_mid, n_mid = solve(u0, p0)
     d = max(width, 1e-9 * abs(p0))
@@ -458,11 +462,13 @@ def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60, wid
         else:  # a third impact count or no solution: stop at the bracket so far
             break
     pair = (int(lo[2]), int(hi[2]))
+    if far is not None:
+        pair = tuple(far if n else -1 for n in pair)  # -1: another number than far
     if expect is not None and pair != tuple(expect):
         raise ConvergenceError(
             f"grazing: the change of impacts found near {0.5 * (lo[0] + hi[0]):.9g} "
-            f"({pair[0]} -> {pair[1]}) is not the one located before ({expect[0]} -> "
-            f"{expect[1]}): another change of the number of impacts")
+            f"({pair[0]} -> {pair[1]}; -1: another number) is not the one located before "
+            f"({expect[0]} -> {expect[1]}): another change of the number of impacts")
     near = lo if lo[2] == n_mid else hi
     return 0.5 * (lo[0] + hi[0]), near[1], 0.5 * (hi[0] - lo[0]), pair
 
@@ -473,9 +479,11 @@ def _locate(kind, prob, u, p, width, resolution, hint):
     if kind == "grazing":
         # a relocation at the diagram's own step stays inside the diagram's bracket; a finer
         # level takes only the change between the same numbers of impacts (hint['impacts'])
+        if "far" not in hint and hint.get("level0"):  # the diagram's point: the far side
+            hint["far"] = int(prob.solve(u, p, tol=1e-10, max_iter=12)[1].n_impacts)
         p, u, half, pair = _grazing_bisect(prob, u, p, width, resolution,
                                            widen=not hint.get("level0", False),
-                                           expect=hint.get("impacts"))
+                                           expect=hint.get("impacts"), far=hint.get("far"))
         hint["impacts"], hint["level0"] = pair, False
         return p, u, half
     if kind == "fold":

@@ -60,7 +60,8 @@ def test_the_diagrams_own_bracket_is_not_widened_at_level_0():
     hint = {"level0": True}
     p, u, half = _locate("grazing", Steps([0.99995], [5, 6]), np.zeros(2), 1.0, 1e-4, 1e-9,
                          hint)
-    assert abs(p - 0.99995) < 2e-9 and hint == {"level0": False, "impacts": (5, 6)}
+    # (the far side: the diagram's point, 6 impacts; -1: another number)
+    assert abs(p - 0.99995) < 2e-9 and hint == {"level0": False, "impacts": (-1, 6), "far": 6}
     # the next level (the change moved by 2e-4, beyond the bracket): found by widening, and
     # the same event; a level whose nearest change is between other counts raises
     p, u, half = _locate("grazing", Steps([1.00015], [5, 6]), np.zeros(2), p, 1e-4, 1e-9,
@@ -134,3 +135,21 @@ def test_comparison_skips_only_stretches_both_diagrams_declare():
     assert structure_differences(a, c)  # c declares nothing: compared
     d = _diagram(66.568, [66.40, 66.559])  # 66.40 lies outside a's stretch
     assert structure_differences(a, d)
+
+
+def test_a_flickering_count_beside_the_grazing_point_is_one_side():
+    """The paper model's order-1 grazing point near 6.648 Hz: 3 impacts above it, below it the
+    count flickers between 4 and 5 (a tiny impact comes and goes). Located from the far side
+    (3), the level-0 bracket is no cluster and the finer level finds the edge of the 3-impact
+    stretch 1.4e-3 Hz away, not a 4 / 5 flicker next to the level-0 value."""
+    breaks0 = [6.6472, 6.64725, 6.64755, 6.64762]
+    level0 = Steps(breaks0, [4, 5, 4, 5, 3])
+    hint = {"level0": True}
+    p, u, half = _locate("grazing", level0, np.zeros(2), 6.64785, 2.8e-4, 1e-9, hint)
+    assert abs(p - 6.64762) < 1e-8 and hint["far"] == 3 and hint["impacts"] == (-1, 3)
+    level1 = Steps([6.64735, 6.6474, 6.64805, 6.6481, 6.64915], [4, 5, 4, 5, 4, 3])
+    p, u, half = _locate("grazing", level1, np.zeros(2), p, 2.8e-4, 1e-9, hint)
+    assert abs(p - 6.64915) < 1e-8
+    # without the far side's count the nearest change is a flicker (another event)
+    with pytest.raises(ConvergenceError, match="another change"):
+        _grazing_bisect(level1, np.zeros(2), 6.64762, 2.8e-4, 1e-9, expect=(5, 3))
