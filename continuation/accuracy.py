@@ -374,20 +374,52 @@ def _vertex_along(prob, z0, t, jp, delta, tol, s_tol=3e-6, max_iter=12):
                            f"{z0[-1] * prob.scale_p:.9g}")
 
 
-def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60):
+def _one_change_in(solve, u0, n0, p0, dp, n_scan):
+    """Raise ConvergenceError unless the number of impacts changes once only on the way from
+    p0 (n0 impacts) to p0 + dp, sampled at n_scan equal steps (several changes within a
+    bracket: which one a bisection lands on is up to round-off)."""
+    counts, u = [n0], u0
+    for j in range(1, n_scan + 1):
+        try:
+            u, n = solve(u, p0 + dp * j / n_scan)
+        except ConvergenceError:
+            continue
+        counts.append(n)
+    k = sum(a != b for a, b in zip(counts[:-1], counts[1:]))
+    if k > 1:
+        raise ConvergenceError(
+            f"grazing: {k} changes of the number of impacts ({'/'.join(map(str, counts))}) "
+            f"between {p0:.9g} and {p0 + dp:.9g}: a cluster, located no closer than that")
+
+
+def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60, widen=True,
+                    expect=None, n_scan=8, far=None):
     """Grazing point of prob near p0: where the number of impacts per period changes, by
-    bisection in p between orbits solved at fixed p (the bracket is first widened from
-    ``width``, 4 times at each try, up to 2^11 ``width``, until its ends differ) down to a
-    width of ``resolution`` |p0|. Returns (the middle of the bracket, u at its end on p0's
-    side, half the bracket's width)."""
+    bisection in p between orbits solved at fixed p, down to a width of ``resolution`` |p0|.
+    The change is searched at p0 +- ``width`` first, then (``widen``) 4 times wider at each
+    try up to 2^11 ``width``; where it first shows at p0 +- d, the stretch beyond the last
+    width tried is scanned outward in at most ``n_scan`` steps and the first step whose
+    count differs is bisected: the change nearest p0, not any change the wide bracket holds.
+    expect: (impacts below, impacts above) of the change located at an earlier level; a
+    change between other numbers of impacts is another event (ConvergenceError), never
+    this one's estimate. Without ``widen`` (the diagram's own bracket) a bracket in which the
+    number of impacts changes more than once (sampled at ``n_scan`` points) is a cluster:
+    ConvergenceError (the diagram's bracket is then the stated error). Returns (the middle of
+    the final bracket, u at its end on p0's side, half the bracket's width, (impacts below,
+    impacts above)). far: the number of impacts on the grazing point's far side (the
+    diagram's point): counts are then classed as that number or another one, so that a count
+    flickering between two others next to the grazing point (chattering: 4 / 5 impacts below
+    the paper model's 6.648 Hz grazing point, 3 above) is one side, not a change."""
     def solve(u, p):
         u, ev, _, _ = prob.solve(u, p, tol=tol, max_iter=12)
-        return u, ev.n_impacts
+        n = ev.n_impacts
+        return u, (n if far is None else int(n == far))
 
     u_mid, n_mid = solve(u0, p0)
     d = max(width, 1e-9 * abs(p0))
-    d_max = min(0.01 * abs(p0), 2.0 ** 11 * d)  # the widest bracket tried
+    d_max = min(0.01 * abs(p0), 2.0 ** 11 * d) if widen else d  # the widest bracket tried
     lo = hi = None
+    d_prev = 0.0
     while True:
         for s in (-1.0, 1.0):
             try:
@@ -395,14 +427,31 @@ def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60):
             except ConvergenceError:
                 continue
             if n_s != n_mid:
-                a, b = sorted([(p0, u_mid, n_mid), (p0 + s * d, u_s, n_s)], key=lambda x: x[0])
-                lo, hi = a, b
+                near = (p0, u_mid, n_mid)
+                if not widen:  # the diagram's own bracket: one change in it, or a cluster
+                    _one_change_in(solve, u_mid, n_mid, p0, s * d, n_scan)
+                # the first change outward from p0: scan the stretch not tried before
+                step = (d - d_prev) / max(1, min(n_scan, int(np.ceil((d - d_prev) / width))))
+                q = d_prev
+                while q + step < d * (1.0 - 1e-12):
+                    q += step
+                    try:
+                        u_q, n_q = solve(near[1], p0 + s * q)
+                    except ConvergenceError:
+                        continue
+                    if n_q != n_mid:
+                        u_s, n_s = u_q, n_q
+                        break
+                    near = (p0 + s * q, u_q, n_q)
+                else:
+                    q = d
+                lo, hi = sorted([near, (p0 + s * q, u_s, n_s)], key=lambda x: x[0])
                 break
         if lo is not None:
             break
         if d >= d_max:
             break
-        d = min(4.0 * d, d_max)
+        d_prev, d = d, min(4.0 * d, d_max)
     if lo is None:
         raise ConvergenceError(f"grazing: no change of the number of impacts near {p0:.9g}")
     for _ in range(max_iter):
@@ -419,15 +468,31 @@ def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60):
             hi = (pm, um, nm)
         else:  # a third impact count or no solution: stop at the bracket so far
             break
+    pair = (int(lo[2]), int(hi[2]))
+    if far is not None:
+        pair = tuple(far if n else -1 for n in pair)  # -1: another number than far
+    if expect is not None and pair != tuple(expect):
+        raise ConvergenceError(
+            f"grazing: the change of impacts found near {0.5 * (lo[0] + hi[0]):.9g} "
+            f"({pair[0]} -> {pair[1]}; -1: another number) is not the one located before "
+            f"({expect[0]} -> {expect[1]}): another change of the number of impacts")
     near = lo if lo[2] == n_mid else hi
-    return 0.5 * (lo[0] + hi[0]), near[1], 0.5 * (hi[0] - lo[0])
+    return 0.5 * (lo[0] + hi[0]), near[1], 0.5 * (hi[0] - lo[0]), pair
 
 
 def _locate(kind, prob, u, p, width, resolution, hint):
     """(p, u, half-width of the final bracket) of the bifurcation of this kind near p (hint:
     a dict carried from level to level)."""
     if kind == "grazing":
-        return _grazing_bisect(prob, u, p, width, resolution)
+        # a relocation at the diagram's own step stays inside the diagram's bracket; a finer
+        # level takes only the change between the same numbers of impacts (hint['impacts'])
+        if "far" not in hint and hint.get("level0"):  # the diagram's point: the far side
+            hint["far"] = int(prob.solve(u, p, tol=1e-10, max_iter=12)[1].n_impacts)
+        p, u, half, pair = _grazing_bisect(prob, u, p, width, resolution,
+                                           widen=not hint.get("level0", False),
+                                           expect=hint.get("impacts"), far=hint.get("far"))
+        hint["impacts"], hint["level0"] = pair, False
+        return p, u, half
     if kind == "fold":
         return (*_fold_turning_point(prob, u, p, hint=hint), 0.0)
     return (*_secant_regular(prob, u, p, kind, hint), 0.0)
@@ -514,7 +579,7 @@ def bifurcation_levels(model, amplitude, bif, integrator, *, parameter="frequenc
     value, error = p, float("nan")
     failed = ""
     prob = u = None
-    hint = {}
+    hint = {"level0": relocate}  # (grazing: the level-0 search stays in the diagram's bracket)
     width = max(float(bif.tolerance) if math.isfinite(bif.tolerance) else 0.0,
                 0.5 * 10.0 ** -digits * abs(p))
     for k in range(0 if relocate else 1, max_levels + 1):
@@ -955,8 +1020,10 @@ def estimate_diagram(frc, model, integrator, *, accuracy=None, every=1, segments
                          f"step (error NaN): at {_short(f_)}")
     if bracketed:
         parts.append(f"{len(bracketed)} grazing point(s) or bifurcation(s) at one could not be "
-                     "located again by bisection at a fixed frequency (a fold at the corner?): "
-                     "their error is the width of the diagram's bracket: at "
+                     "located again by bisection at a fixed frequency (a fold at the corner, or "
+                     "several changes of the number of impacts in the bracket, or at the finer "
+                     "step only a change between other numbers of impacts nearby): their error "
+                     "is the width of the diagram's bracket: at "
                      + _short([f"{b.value:.9g} +- {b.error:.1e}" for b in bracketed]))
     if above:
         parts.append(f"{len(above)} fold/PD/NS point(s) with errors above the target after "

@@ -181,6 +181,15 @@ class FrequencyResponse(Summary):
         return _uncovered(_intervals([b for b in self.branches if b.order == order]),
                           min(self.p_range), max(self.p_range))
 
+    def unresolved(self, order=None):
+        """The stretches of p_range (list of (order, lo, hi, what)) the diagram declares
+        unresolved: around each branch end inside the range where the tracer gave up or the
+        fixed-step map jumps, within CHATTER_REACH of the end and of the branch's chained
+        grazing points and bifurcations there (see CHATTER_REACH); the diagram's warning lists
+        them. Only of that order if given."""
+        return [s for s in _unresolved(self.branches, self.bifurcations, self.p_range)
+                if order is None or s[0] == order]
+
     def _summary_rows(self):
         from collections import Counter
 
@@ -206,6 +215,10 @@ class FrequencyResponse(Summary):
             gaps = self.uncovered(1)
             rows.append(("order 1 uncovered", "none" if not gaps else ", ".join(
                 f"{a:g}..{b:g}" for a, b in gaps)))
+        stretches = self.unresolved()
+        if stretches:
+            rows.append(("unresolved", ", ".join(f"order {o}: {a:.6g}..{c:.6g}"
+                                                 for o, a, c, _ in stretches)))
         acc = self.stated_accuracy()
         if acc:
             rows.append(("stated errors", acc))
@@ -912,6 +925,59 @@ _GAVE_UP = _EARLY_ENDS + ("no progress",)  # ends where the tracer gave up (the 
 _JUMP = "discontinuous map"  # ends where the fixed-step map jumps: no continuous branch goes on
 
 
+# a branch end where the tracer gave up, or where the fixed-step map jumps, lies in a stretch
+# where the number of impacts changes often (chattering contacts): where exactly the trace ends
+# and which of the changes before it the tracer's steps resolve is up to round-off (the paper
+# model, A = 0.1 mm, m, k, b, K_hertz x (1 +- 1e-13): the order-2 branch from 58 Hz ends at
+# 66.561-66.568 Hz with 0-2 grazing points on its last 0.03 Hz; the one from 75 Hz at
+# 67.4999-67.5054 Hz with 2-6 changes). The diagram declares the stretch unresolved: within
+# CHATTER_REACH (relative) of the end, widened over the branch's own grazing points and
+# bifurcations that follow each other within that reach.
+CHATTER_REACH = 1e-3
+
+
+def _unresolved(branches, bifs, p_range):
+    """The stretches of p_range the diagram does not resolve (see CHATTER_REACH): a list of
+    (order, lo, hi, what) sorted by order and lo, overlapping ones of an order merged."""
+    lo_r, hi_r = min(p_range), max(p_range)
+    raw = []
+    for bi, b in enumerate(branches):
+        ev = sorted(float(x.value) for x in bifs if x.branch == bi)
+        for reason, v in ((b.ends[0], b.values[0]), (b.ends[1], b.values[-1])):
+            v = float(v)
+            if not (reason in _GAVE_UP or reason == _JUMP) or not lo_r < v < hi_r:
+                continue
+            a = c = v
+            grown = True
+            while grown:  # over the branch's events chained within the reach
+                grown = False
+                for x in ev:
+                    r = CHATTER_REACH * abs(x)
+                    if (x < a and a - x <= r) or (x > c and x - c <= r):
+                        a, c, grown = min(a, x), max(c, x), True
+            a -= CHATTER_REACH * abs(a)
+            c += CHATTER_REACH * abs(c)
+            n = sum(a <= x <= c for x in ev)
+            raw.append((b.order, max(a, lo_r), min(c, hi_r),
+                        f"branch {bi + 1} ends at {v:.6g} ({reason}); {n} of its "
+                        f"bifurcations and grazing points lie there"))
+    out = []
+    for o, a, c, what in sorted(raw):
+        if out and out[-1][0] == o and a <= out[-1][2]:
+            out[-1] = (o, out[-1][1], max(out[-1][2], c), out[-1][3] + "; " + what)
+        else:
+            out.append((o, a, c, what))
+    return out
+
+
+def _unresolved_text(stretches, unit):
+    return ("unresolved (around a branch end where the tracer gave up or the map jumps, "
+            "mostly where the number of impacts changes often: where the branch ends, and "
+            "which grazing points and bifurcations near its end are listed, may differ with "
+            "round-off): " + "; ".join(
+                f"order {o}: {a:.6g}-{c:.6g}{unit} ({what})" for o, a, c, what in stretches))
+
+
 def _intervals(branches):
     """(lo, hi) parameter interval of each branch; an end where the branch ran onto a traced
     one ('stop', see _on_branch: within 2e-3 relative plus a twentieth of a segment) is
@@ -992,12 +1058,14 @@ def _coverage(branches, p_range, orders):
     return gaps, early
 
 
-def _warn_coverage(branches, p_range, orders, parameter, unit, what_to_try):
+def _warn_coverage(branches, p_range, orders, parameter, unit, what_to_try, bifs=()):
     """One ContinuationWarning listing every part of p_range that no branch of a requested
-    order covers (see ``_coverage``) and the branch ends inside it where the tracer gave up;
-    an empty diagram always warns."""
+    order covers (see ``_coverage``), the branch ends inside it where the tracer gave up and
+    the stretches around them the diagram does not resolve (``_unresolved``); an empty
+    diagram always warns."""
     gaps, early = _coverage(branches, p_range, orders)
     unit = f" {unit}" if unit else ""
+    stretches = _unresolved(branches, bifs, p_range)
     parts = []
     if not branches:
         parts.append(f"no branch of order(s) {', '.join(map(str, orders))} was found between "
@@ -1015,6 +1083,8 @@ def _warn_coverage(branches, p_range, orders, parameter, unit, what_to_try):
                      "map (a contact that ends and restarts within a step, or the "
                      "Lankarani-Nikravesh onset-velocity memory reset: no continuous branch "
                      "of the discrete map goes on there): " + "; ".join(jumps))
+    if stretches:
+        parts.append(_unresolved_text(stretches, unit))
     if parts:
         warnings.warn(
             f"continuation: the {parameter} range is not fully covered: " + ". ".join(parts)
@@ -1191,7 +1261,7 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
                        "try a start inside it (starts=[(f, order, state0)], e.g. from "
                        "periodic_solution), a finer brute-force grid (n_grid), finer integration "
                        "(dt_scale=0.5, steps_per_contact=64), multiple shooting (segments=4), a "
-                       "smaller ds_max or max_points larger.")
+                       "smaller ds_max or max_points larger.", bifs)
         sup = _superharmonics(branches, model, integrator)
         frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=float(amplitude),
                                 parameter="frequency", p_range=(f_lo, f_hi), branches=branches,
