@@ -255,7 +255,7 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
     parallel = scheduler is not None or (
         scene.sweep is not None and len(todo) > 1 and min(w or os.cpu_count() or 1,
                                                           len(todo)) > 1)
-    if todo and scheduler is None:  # the kernels here (before a pool forks its workers)
+    if parallel and scheduler is None:  # the kernels here, before the pool forks its workers
         prepare_kernels([j.inputs for j in todo])
     if parallel:
         outs = _run_parallel(todo, w, scheduler, show, quiet, name_of)
