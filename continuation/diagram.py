@@ -183,8 +183,8 @@ class FrequencyResponse(Summary):
 
     def unresolved(self, order=None):
         """The stretches of p_range (list of (order, lo, hi, what)) the diagram declares
-        unresolved: around each branch end inside the range where the tracer gave up or the
-        fixed-step map jumps, within CHATTER_REACH of the end and of the branch's chained
+        unresolved: around each branch end inside the range where the tracer gave up (not at
+        the point budget, 'max_points') or the fixed-step map jumps, within CHATTER_REACH of the end and of the branch's chained
         grazing points and bifurcations there (see CHATTER_REACH); the diagram's warning lists
         them. Only of that order if given."""
         return [s for s in _unresolved(self.branches, self.bifurcations, self.p_range)
@@ -937,16 +937,19 @@ CHATTER_REACH = 1e-3
 
 
 def _unresolved(branches, bifs, p_range):
-    """The stretches of p_range the diagram does not resolve (see CHATTER_REACH): a list of
-    (order, lo, hi, what) sorted by order and lo, overlapping ones of an order merged."""
+    """The stretches of p_range the diagram does not resolve (see CHATTER_REACH; not around
+    an end at the point budget, 'max_points', which the coverage warning names with its own
+    advice): a list of (order, lo, hi, what) sorted by order and lo, overlapping ones of an
+    order merged."""
     lo_r, hi_r = min(p_range), max(p_range)
     raw = []
     for bi, b in enumerate(branches):
         ev = sorted(float(x.value) for x in bifs if x.branch == bi)
         for reason, v in ((b.ends[0], b.values[0]), (b.ends[1], b.values[-1])):
             v = float(v)
-            if not (reason in _GAVE_UP or reason == _JUMP) or not lo_r < v < hi_r:
-                continue
+            if not (reason in _GAVE_UP or reason == _JUMP) or reason == "max_points" \
+                    or not lo_r < v < hi_r:
+                continue  # (the point budget ends a branch where the count says, anywhere)
             a = c = v
             grown = True
             while grown:  # over the branch's events chained within the reach
