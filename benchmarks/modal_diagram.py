@@ -22,8 +22,8 @@ K = 2.1e8 N/m^1.5, e = 0.5), A = 0.1 mm, 5-150 Hz, orders 1 and 2, n_grid 20. Un
   seconds of this process in brackets); at the end the CPU per stage (brute-force grid,
   branches, error estimates), the CPU of the branches by how they ended, the flows the tracer
   asked for (per half-branch end reason, with those spent after the half's last point: what
-  giving up cost), and the diagram's warnings. --accuracy: as the scene says (figures/modal_beam.toml: "off", no error
-  estimates; "default" for the estimates as well).
+  giving up cost), and the diagram's warnings. --accuracy: as the scene says
+  (figures/modal_beam.toml: "off", no error estimates; "default" for the estimates as well).
 
 Measured on main 97c7b7d (2026-11-24, 2 cores at load ~10, one run under cProfile, fresh
 kernel cache): 854 s CPU: brute-force grid 257 s, all but <= 10 s of it compiling the kernels;

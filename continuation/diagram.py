@@ -184,9 +184,9 @@ class FrequencyResponse(Summary):
     def unresolved(self, order=None):
         """The stretches of p_range (list of (order, lo, hi, what)) the diagram declares
         unresolved: around each branch end inside the range where the tracer gave up (not at
-        the point budget, 'max_points') or the fixed-step map jumps, within CHATTER_REACH of the end and of the branch's chained
-        grazing points and bifurcations there (see CHATTER_REACH); the diagram's warning lists
-        them. Only of that order if given."""
+        the point budget, 'max_points') or the fixed-step map jumps, within CHATTER_REACH of
+        the end and of the branch's chained grazing points and bifurcations there (see
+        CHATTER_REACH); the diagram's warning lists them. Only of that order if given."""
         return [s for s in _unresolved(self.branches, self.bifurcations, self.p_range)
                 if order is None or s[0] == order]
 
