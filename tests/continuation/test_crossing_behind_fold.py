@@ -98,3 +98,69 @@ def test_corner_before_the_fold_is_still_passed_straight(k, uf):
     dp = np.diff([q.p for q in pts])
     assert np.all(dp < 0)
     assert abs(loc[0].point.p - k * uf ** 2) < 1e-4
+
+
+class StrandBehind(Problem):
+    """R = (r(u1, p), -u2) with three pieces: u1 < -0.015 (0 impacts): r = u1 + p (strand A,
+    p falling as u1 rises, ending at u1 = -0.015 where r jumps); -0.015 <= u1 < 0 (0 impacts):
+    r = p - 0.021 - u1 / 10 (strand B, p = 0.0195 .. 0.021); u1 >= 0 (1 impact):
+    r = u1 + p - 0.021. B and the 1-impact strand meet at a corner (u1 = 0, p = 0.021,
+    a non-smooth fold: dr/du1 changes sign); A meets neither."""
+
+    scale_u = np.ones(2)
+    scale_p = 1.0
+
+    def side(self, u):
+        return int(u[0] >= 0.0)
+
+    def evaluate(self, u, p, jac=True, jac_p=True):
+        if u[0] < -0.015:
+            r, dr = u[0] + p, 1.0
+        elif u[0] < 0.0:
+            r, dr = p - 0.021 - 0.1 * u[0], -0.1
+        else:
+            r, dr = u[0] + p - 0.021, 1.0
+        J = np.array([[dr, 0.0], [0.0, -1.0]])
+        return Evaluation(np.array([r, -u[1]]), J if jac else None,
+                          np.array([1.0, 0.0]) if jac_p else None,
+                          [np.eye(2) + 0.1 * J] if jac else [], abs(u[0]), self.side(u))
+
+    def jacobian_p(self, u, p, ev=None):
+        return np.array([1.0, 0.0])
+
+    def multipliers(self, Ms):
+        mu = np.linalg.eigvals(Ms[0])
+        return mu[np.argsort(-np.abs(mu), kind="stable")]
+
+    def adapt(self, u, p):
+        return None
+
+
+def _check(z_a, t_a, z_b):
+    from continuation.corners import check_crossing
+    prob = StrandBehind()
+    tr = Tracer(p_min=-1.0, p_max=1.0)
+    ev_a, ev_b = (prob.evaluate(z[:2], z[2]) for z in (z_a, z_b))
+    assert max(abs(ev_a.R).max(), abs(ev_b.R).max()) < 1e-15
+    t_a = t_a / np.linalg.norm(t_a)
+    a, b = tr._point(prob, z_a, ev_a, t_a), tr._point(prob, z_b, ev_b, t_a)
+    return check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict=False)
+
+
+def test_a_bisection_point_behind_a_in_the_parameter_rejects_the_crossing():
+    """a on strand A at p = 0.02 travelling down, b on the 1-impact strand at p = 0.015: the
+    chord's bisection finds strand B (0 impacts, p = 0.0204 .. 0.021: behind a) and closes in
+    on B's corner with the 1-impact strand at p = 0.021 (before this check it was accepted as
+    a crossing, joined, without a turn: the paper model's 9.168480 -> 9.152085 Hz step, whose
+    bisection's near end lay at 9.1732 Hz, behind a). No crossing: A does not reach it."""
+    z_a = np.array([-0.02, 0.0, 0.02])
+    assert _check(z_a, np.array([1.0, 0.0, -1.0]), np.array([0.006, 0.0, 0.015])) is None
+
+
+def test_the_corner_of_the_strand_behind_is_crossed_from_that_strand():
+    """The same corner approached along B itself (p rising to 0.021): a crossing, joined,
+    turning back (the sign of dr/du1 changes there), bracketed at p = 0.021."""
+    z_a = np.array([-0.01, 0.0, 0.02])
+    cr = _check(z_a, np.array([1.0, 0.0, 0.1]), np.array([0.003, 0.0, 0.018]))
+    assert cr is not None and cr.connected and cr.turn
+    assert abs(cr.lo.p - 0.021) < 1e-4 and abs(cr.hi.p - 0.021) < 1e-4
