@@ -88,6 +88,16 @@ def _behind(dz, t, cos_max=-0.5):
     return n > 0.0 and la.dot(dz, t) < cos_max * n
 
 
+def _behind_in_p(z, z_a, t, turn_tol, rel=1e-9):
+    """Does z (scaled) lie behind z_a in the parameter, against the direction of travel t
+    (unit; not judged where its parameter component is below turn_tol), by more than rel of
+    the parameter (the paper model at 9.1685 Hz: a bisection point of a's number of impacts
+    at 9.1732 Hz, behind a branch point at 9.1685 travelling down)?"""
+    if abs(t[-1]) <= turn_tol:
+        return False
+    return (z[-1] - z_a[-1]) * np.sign(t[-1]) < -rel * max(1.0, abs(z_a[-1]))
+
+
 def check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict):
     """Is b (another number of impacts than a) the continuation of the branch through a (z_a,
     direction of travel t_a) across a grazing point? The chord from a to b is bisected (the
@@ -141,6 +151,10 @@ def check_crossing(tr, prob, a, z_a, t_a, b, z_b, strict):
             if q.n_impacts == a.n_impacts and _behind(zs - z_a, t_near):
                 return None  # the mid-plane cut a's own stretch behind a: the chord brackets
                 # no corner ahead of a (b lies on another strand)
+            if q.n_impacts == a.n_impacts and _behind_in_p(zs, z_a, t_near, tr.turn_tol):
+                return None  # a point of a's number of impacts behind a in the parameter:
+                # not on a's strand between a and the corner (which runs ahead of a, unless
+                # it turns at a smooth fold first: then the step is too long to tell)
             if q.n_impacts == a.n_impacts:
                 lo, z_lo = q, zs
             else:
@@ -193,6 +207,29 @@ def smooth_fold_beside(tr, a, crossing, b):
         if ok_p and ok_q and s_p != s_q:
             return True
     return False
+
+
+def fold_ahead(tr, a, crossing):
+    """May the near strand turn at a smooth fold before it reaches the corner of this
+    crossing? So where a real multiplier of a lies within ``tr.fold_margin`` of +1 (a smooth
+    fold of a's strand is near: the sign of prod(mu - 1) there is what ``fold_sign`` cannot
+    trust) and the chord's bisection never moved the near end off a (no point of a's strand
+    nearer the grazing point was seen: nothing shows that the strand reaches it), or moved it
+    to a point of a's number of impacts where the sign of prod(mu - 1) differs from a's (the
+    near end lies beyond the fold, on the strand's way back). Such a step
+    may land behind the fold, on the strand beyond it (the paper model at 9.1681 Hz: a step
+    from 9.168480 Hz, above the 8-impact strand's fold 9.168092, to a 7-impact orbit at
+    9.152085 Hz, taken as a corner crossing or not as round-off decided); a shorter step
+    decides it: it reaches the fold (and turns there) or brackets the corner from a's side."""
+    mu = a.multipliers
+    if mu is None:
+        return False
+    real = mu.real[np.abs(mu.imag) <= 1e-9 * np.maximum(1.0, np.abs(mu))]
+    if not np.any(np.abs(real - 1.0) < tr.fold_margin):
+        return False
+    if crossing.lo is a:
+        return True
+    return fold_sign(crossing.lo, tr.fold_margin)[0] != fold_sign(a, tr.fold_margin)[0]
 
 
 def far_side(tr, prob, a, z_a, t_in, guesses, avoid):

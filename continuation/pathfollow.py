@@ -12,7 +12,7 @@ import numpy as np
 
 from nlbeam import _linalg as la
 from ._newton import ContinuationWarning, ConvergenceError
-from .corners import (JUMP_HS, Retrace, check_crossing, far_side, map_jump,
+from .corners import (JUMP_HS, Retrace, check_crossing, far_side, fold_ahead, map_jump,
                       smooth_fold_beside, tangent)
 
 KINDS = ("fold", "period-doubling", "neimark-sacker")  # from the test functions
@@ -627,12 +627,14 @@ class Tracer:
                         else:
                             crossing = check_crossing(self, prob, pts[-1], z, t_in, ptn, zn,
                                                       strict=strict or not ok)
-                            if (crossing is not None and crossing.turn
-                                    and ds > 4 * self.ds_min
-                                    and smooth_fold_beside(self, pts[-1], crossing, ptn)):
+                            if (crossing is not None and ds > 4 * self.ds_min
+                                    and ((crossing.turn and smooth_fold_beside(
+                                        self, pts[-1], crossing, ptn))
+                                         or fold_ahead(self, pts[-1], crossing))):
                                 crossing = None  # the turn may be a smooth fold's on the
-                                # step: a shorter step separates the two (which one turns the
-                                # branch and where the grazing point lies is not up to
+                                # step, or the step may land behind a smooth fold of the near
+                                # strand: a shorter step separates the two (which one turns
+                                # the branch and where the grazing point lies is not up to
                                 # round-off)
                                 angle = np.nan
                             ok = crossing is not None

@@ -286,21 +286,18 @@ def test_grazing_points_within_each_others_bracket_are_merged():
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="the tracer's path still depends on round-off (issue 13 "
-                   "item 4; measured on s11-chatter with benchmarks/roundoff_structure.py: "
-                   "x (1 + 1e-13) 13, x (1 - 1e-13) 12, A x (1 + 1e-13) 13 unmatched "
-                   "bifurcations (main 7fb9bee: 22 / 17 / 14), each with 2 against 3 order-1 "
-                   "and 11 against 10 order-2 branches): 9.0-9.7 Hz (11-12 of them: at the "
-                   "grazing point 9.16773 Hz, s11-bothsides found: the reference's order-1 branch "
-                   "steps from the 8-impact strand at 9.168480 Hz, just above its smooth fold "
-                   "9.168092, to a 7-impact orbit at 9.152085 Hz on the strand from 8.34 Hz, and "
-                   "corners.check_crossing accepts it (smooth_fold_beside sees no fold when the "
-                   "bisection never moves lo off a); the perturbed runs turn at the fold, which "
-                   "is right: a false crossing behind a fold of the near strand, not a corner "
-                   "with two far sides) and 110.8-110.9 Hz "
-                   "(order 3, 1-2: one run's branch ends 'stop' on another branch, the other's "
-                   "gives up 'stuck at a corner'). Gone: the 6.648 Hz grazing estimate (the "
-                   "far side's count; accuracy._grazing_bisect) and 66.5 / 67.5 Hz (both runs "
-                   "declare the stretch unresolved: FrequencyResponse.unresolved): remove when "
+                   "item 4; measured on s11-fold with benchmarks/roundoff_structure.py: "
+                   "x (1 + 1e-13) 5, x (1 - 1e-13) 4, A x (1 + 1e-13) 4 unmatched "
+                   "bifurcations (s11-merge: 13 / 12 / 13), branches 15 against 15 in each; "
+                   "structure_differences 4 / 3 / 3 lines): 9.33-9.67 Hz (3 each: the "
+                   "order-1 grazing point 9.334206 against 9.333757 / 9.338986, the order-2 "
+                   "fold 9.663664 found in the "
+                   "reference only, or the order-1 period doubling 9.664252 against 9.664019) "
+                   "and 110.83-110.90 Hz (order 3, 1-2: folds / a period doubling of one run "
+                   "only). Gone: the false crossing 9.168480 -> 9.152085 Hz behind the smooth "
+                   "fold 9.168092 (corners.check_crossing: a bisection point behind the near "
+                   "point in the parameter; corners.fold_ahead), the 6.648 Hz grazing estimate "
+                   "and 66.5 / 67.5 Hz (both runs declare the stretch unresolved): remove when "
                    "it passes")
 def test_paper_diagram_keeps_its_structure_under_round_off():
     """The whole paper diagram (A = 0.1 mm, 5-150 Hz, orders 1-3) with m, k, b, K_hertz x
