@@ -34,6 +34,12 @@ def tangent(J, t_prev):
     return t / la.norm(t)
 
 
+def _real_near_one(mu, margin):
+    """Does a real multiplier of mu lie within ``margin`` of +1?"""
+    real = mu.real[np.abs(mu.imag) <= 1e-9 * np.maximum(1.0, np.abs(mu))]
+    return bool(np.any(np.abs(real - 1.0) < margin))
+
+
 def fold_sign(pt, margin):
     """(sign of prod(mu - 1), reliable) of a branch point: from its multipliers, or without
     them from det(dR/du) of its Jacobian (the same sign up to a factor fixed by the problem's
@@ -42,8 +48,7 @@ def fold_sign(pt, margin):
     mu = pt.multipliers
     if mu is not None:
         tf = float(np.prod(mu - 1.0).real)
-        real = mu.real[np.abs(mu.imag) <= 1e-9 * np.maximum(1.0, np.abs(mu))]
-        return np.sign(tf), bool(tf != 0.0 and not np.any(np.abs(real - 1.0) < margin))
+        return np.sign(tf), bool(tf != 0.0 and not _real_near_one(mu, margin))
     if pt.jac is not None:
         n = pt.jac.shape[0]
         s = la.det_sign(pt.jac[:, :n])
@@ -221,11 +226,7 @@ def fold_ahead(tr, a, crossing):
     from 9.168480 Hz, above the 8-impact strand's fold 9.168092, to a 7-impact orbit at
     9.152085 Hz, taken as a corner crossing or not as round-off decided); a shorter step
     decides it: it reaches the fold (and turns there) or brackets the corner from a's side."""
-    mu = a.multipliers
-    if mu is None:
-        return False
-    real = mu.real[np.abs(mu.imag) <= 1e-9 * np.maximum(1.0, np.abs(mu))]
-    if not np.any(np.abs(real - 1.0) < tr.fold_margin):
+    if a.multipliers is None or not _real_near_one(a.multipliers, tr.fold_margin):
         return False
     if crossing.lo is a:
         return True

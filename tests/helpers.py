@@ -12,6 +12,7 @@ import scipy.optimize
 from numba import njit
 
 import nlbeam
+from continuation.pathfollow import Problem
 from nlbeam import _kernels
 
 
@@ -213,3 +214,20 @@ def write_scene(folder, text, name="scene.toml"):
     p = folder / name
     p.write_text(text)
     return p
+
+
+class ToyProblem(Problem):
+    """Base of the synthetic problems on the tracer's protocol (continuation.pathfollow.Problem)
+    that give one monodromy matrix per evaluation: multipliers its eigenvalues, largest modulus
+    first (stable order); no adaptation; ``on_branch(u, p)``: the residual's largest entry (for
+    the tests' own checks)."""
+
+    def multipliers(self, Ms):
+        mu = np.linalg.eigvals(Ms[0])
+        return mu[np.argsort(-np.abs(mu), kind="stable")]
+
+    def adapt(self, u, p):
+        return None
+
+    def on_branch(self, u, p):
+        return float(np.max(np.abs(self.evaluate(u, p, jac=False, jac_p=False).R)))

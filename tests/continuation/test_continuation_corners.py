@@ -8,9 +8,10 @@ import continuation as C
 from continuation.corners import Crossing, Retrace
 from continuation.pathfollow import Problem, Tracer
 from continuation.shooting import Evaluation
+from helpers import ToyProblem
 
 
-class PiecewiseLinear(Problem):
+class PiecewiseLinear(ToyProblem):
     """R(u, p) = A_s u + b p + (0, u1^2 / 2), s = 0 where u1 < 0 and 1 where u1 >= 0 (the
     'number of impacts'), with A_1 = A_0 + a e1^T so that R is continuous across u1 = 0.
     Multipliers: the eigenvalues of I + dR/du / 10, so that prod(mu - 1) = det(dR/du) / 100
@@ -36,15 +37,6 @@ class PiecewiseLinear(Problem):
     def jacobian_p(self, u, p, ev=None):
         return self.b.copy()
 
-    def multipliers(self, Ms):
-        mu = np.linalg.eigvals(Ms[0])
-        return mu[np.argsort(-np.abs(mu), kind="stable")]
-
-    def adapt(self, u, p):
-        return None
-
-    def on_branch(self, u, p):
-        return float(np.max(np.abs(self.evaluate(u, p, jac=False, jac_p=False).R)))
 
 
 # non-smooth folds at p = 0: side 0 has u1 = -p, side 1 has u1 = k p, so both exist for p > 0

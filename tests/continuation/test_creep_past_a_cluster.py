@@ -7,8 +7,9 @@ folds, and listed one Neimark-Sacker point with a 0.028 Hz bracket instead."""
 import numpy as np
 
 from continuation.corners import far_side, mu_distance
-from continuation.pathfollow import Problem, Tracer
+from continuation.pathfollow import Tracer
 from continuation.shooting import Evaluation
+from helpers import ToyProblem
 
 P0 = 0.5                       # the last branch point
 P_PD = 0.50007                 # a multiplier passes -1 (smooth period doubling)
@@ -19,7 +20,7 @@ WINDOW = (0.5001, 0.5002)      # 6 impacts per period inside, 5 outside
 JUMPS = (1e-5, 1e-4, 1e-3)
 
 
-class ClusterAhead(Problem):
+class ClusterAhead(ToyProblem):
     """R(u, p) = u - (p, 0): the branch u = (p, 0). Multipliers -1 - (p - P_PD) / 2 and 0.3
     below the window (the period doubling at P_PD), 0.6 and 0.2 inside it, a complex pair
     1.05 e^(+-2i) beyond it."""
@@ -47,12 +48,6 @@ class ClusterAhead(Problem):
     def jacobian_p(self, u, p, ev=None):
         return np.array([-1.0, 0.0])
 
-    def multipliers(self, Ms):
-        mu = np.linalg.eigvals(Ms[0])
-        return mu[np.argsort(-np.abs(mu), kind="stable")]
-
-    def adapt(self, u, p):
-        return None
 
 
 def _creep(**kw):

@@ -6,11 +6,12 @@ not as round-off decided). Exact piecewise-smooth problems on the tracer's proto
 import numpy as np
 import pytest
 
-from continuation.pathfollow import Problem, Tracer
+from continuation.pathfollow import Tracer
 from continuation.shooting import Evaluation
+from helpers import ToyProblem
 
 
-class FoldThenCorner(Problem):
+class FoldThenCorner(ToyProblem):
     """R = (r(u1, p), -u2); side 0 (u1 < 0): r = k (u1 - uf)^2 - p, side 1 (u1 >= 0):
     r = k uf^2 - p + g u1 (continuous across u1 = 0). Multipliers: eigenvalues of
     I + dR/du / 10 (prod(mu - 1) has the sign of det(dR/du)). For uf < 0 the branch, coming
@@ -41,15 +42,6 @@ class FoldThenCorner(Problem):
     def jacobian_p(self, u, p, ev=None):
         return np.array([-1.0, 0.0])
 
-    def multipliers(self, Ms):
-        mu = np.linalg.eigvals(Ms[0])
-        return mu[np.argsort(-np.abs(mu), kind="stable")]
-
-    def adapt(self, u, p):
-        return None
-
-    def on_branch(self, u, p):
-        return float(np.max(np.abs(self.evaluate(u, p, jac=False, jac_p=False).R)))
 
 
 def _trace(k, uf):
@@ -100,7 +92,7 @@ def test_corner_before_the_fold_is_still_passed_straight(k, uf):
     assert abs(loc[0].point.p - k * uf ** 2) < 1e-4
 
 
-class StrandBehind(Problem):
+class StrandBehind(ToyProblem):
     """R = (r(u1, p), -u2) with three pieces: u1 < -0.015 (0 impacts): r = u1 + p (strand A,
     p falling as u1 rises, ending at u1 = -0.015 where r jumps); -0.015 <= u1 < 0 (0 impacts):
     r = p - 0.021 - u1 / 10 (strand B, p = 0.0195 .. 0.021); u1 >= 0 (1 impact):
@@ -128,12 +120,6 @@ class StrandBehind(Problem):
     def jacobian_p(self, u, p, ev=None):
         return np.array([1.0, 0.0])
 
-    def multipliers(self, Ms):
-        mu = np.linalg.eigvals(Ms[0])
-        return mu[np.argsort(-np.abs(mu), kind="stable")]
-
-    def adapt(self, u, p):
-        return None
 
 
 def _check(z_a, t_a, z_b):
