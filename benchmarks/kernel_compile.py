@@ -1,6 +1,7 @@
 """CPU time of the integration kernels' first compile, as on a fresh machine.
 
-python benchmarks/kernel_compile.py [--by-function] [plain var | var plain | ...]
+python benchmarks/kernel_compile.py [--by-function | --by-phase] [plain var | var plain | ...]
+python benchmarks/kernel_compile.py --overlap [off | on] [--repeat N]
 
 Runs one fresh interpreter with numba's cache in an empty temporary folder (NUMBA_CACHE_DIR:
 the kernels cached in this checkout are not read) and compiles the kernels in the order given
@@ -12,6 +13,17 @@ one). Times vary with load; CPU seconds are steadier than wall seconds on a shar
 ``--by-function``: also every numba function compiled on the way, indented by call depth, with
 the CPU seconds of its compile including what it called (what numba compiled twice shows up
 as two lines of one name).
+``--by-phase``: the CPU seconds of each kernel split by what numba does (its exclusive time in
+type inference, lowering to LLVM IR, LLVM's function passes, LLVM's module passes over a
+function's module with every callee's code linked in, machine code of that module, cache
+writes, the rest of numba's pipeline), with the number of calls: every dispatcher level
+optimizes and emits again the code of all it calls.
+``--overlap``: both kernels of the paper model as a scene run prepares them
+(``nlbeam.app.warmup.prepare_kernels`` of a diagram's inputs), in a fresh cache each: once
+with ``OVERLAP = False`` (plain then variational here) and once with the variational kernel
+in a second process beside the plain one (``off`` / ``on`` alone: only that one); prints wall
+seconds and the CPU seconds of this process and of its children, alternating the two
+``--repeat`` times (default 1).
 """
 import os
 import subprocess
@@ -36,6 +48,39 @@ def _traced(self, sig):
 dispatcher.Dispatcher.compile = _traced
 """
 
+PHASES = """
+import collections
+from numba.core import codegen, lowering, typeinfer
+_stack, _excl, _calls = [], collections.defaultdict(float), collections.Counter()
+def _timed(cls, name, what):
+    orig = getattr(cls, name)
+    def timed(*a, **k):
+        t = time.process_time()
+        _stack.append(0.0)
+        try:
+            return orig(*a, **k)
+        finally:
+            inner, dt = _stack.pop(), time.process_time() - t
+            _excl[what] += dt - inner
+            _calls[what] += 1
+            if _stack:
+                _stack[-1] += dt
+    setattr(cls, name, timed)
+_timed(dispatcher.Dispatcher, "compile", "rest of numba's pipeline")
+_timed(typeinfer.TypeInferer, "propagate", "type inference")
+_timed(lowering.Lower, "lower", "lowering to LLVM IR")
+_timed(codegen.CPUCodeLibrary, "_optimize_functions", "LLVM function passes")
+_timed(codegen.CPUCodeLibrary, "_optimize_final_module", "LLVM module passes, callees linked")
+_timed(codegen.CPUCodeLibrary, "_finalize_final_module", "machine code, callees linked")
+_timed(codegen.CPUCodeLibrary, "serialize_using_object_code", "cache writes")
+def _phases(what):
+    print(f"--- {what} by phase (exclusive CPU s, calls)")
+    for name, cpu in sorted(_excl.items(), key=lambda kv: -kv[1]):
+        print(f"  {cpu:6.1f}  {_calls[name]:4d}  {name}")
+    _excl.clear()
+    _calls.clear()
+"""
+
 CODE = """
 import sys, time
 import nlbeam
@@ -45,8 +90,13 @@ for what in sys.argv[1:]:
     t = time.perf_counter()
     if TRACED:
         _log.append((-1, what, 0.0, ''))
+    if PHASED:
+        _excl.clear()
+        _calls.clear()
     cpu = compile_kernels(m, what == "var")
     print(f"{what}: {cpu:.1f} s CPU, {time.perf_counter() - t:.1f} s wall", flush=True)
+    if PHASED:
+        _phases(what)
 k = m.kernels()
 print(f"signatures: integrate_plain {len(k.integrate_plain.signatures)}, "
       f"integrate_var {len(k.integrate_var.signatures)}")
@@ -59,13 +109,47 @@ if TRACED:
 """
 
 
+OVERLAP = """
+import resource, sys, time
+from nlbeam.app import warmup
+warmup.OVERLAP = sys.argv[1] == "on"
+t, c = time.perf_counter(), time.process_time()
+n = warmup.prepare_kernels([{"analysis": "periodic", "model": {"name": "BeamImpact"},
+                             "periodic": {"stability": True}}])
+wall, cpu = time.perf_counter() - t, time.process_time() - c
+child = resource.getrusage(resource.RUSAGE_CHILDREN)
+import nlbeam
+k = nlbeam.BeamImpact.paper().kernels()
+hits = sum(k.integrate_var.stats.cache_hits.values())
+print(f"overlap {sys.argv[1]:>3}: {n} kernels, {wall:6.1f} s wall, {cpu:6.1f} s CPU here, "
+      f"{child.ru_utime + child.ru_stime:6.1f} s CPU in a second process; variational kernel "
+      f"{'loaded from the cache' if hits else 'compiled here'}", flush=True)
+"""
+
+
+def overlap(args):
+    repeat = int(args[args.index("--repeat") + 1]) if "--repeat" in args else 1
+    modes = [a for a in ("off", "on") if a in args] or ["off", "on"]
+    for _ in range(repeat):
+        for mode in modes:
+            with tempfile.TemporaryDirectory(prefix="nlbeam-numba-cache-") as cache:
+                env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+                subprocess.run([sys.executable, "-c", OVERLAP, mode], env=env, check=True)
+
+
 def main(args):
+    if "--overlap" in args:
+        return overlap(args)
     traced = "--by-function" in args
-    order = [a for a in args if a != "--by-function"] or ["plain", "var"]
+    phased = "--by-phase" in args
+    if traced and phased:
+        raise SystemExit("kernel_compile: --by-function or --by-phase, not both")
+    order = [a for a in args if a not in ("--by-function", "--by-phase")] or ["plain", "var"]
     for what in order:
         if what not in ("plain", "var"):
             raise SystemExit(f"kernel_compile: give plain and/or var, got {what!r}")
-    code = (TRACE if traced else "") + f"TRACED = {traced}\n" + CODE
+    code = ("import time\nfrom numba.core import dispatcher\n" + PHASES if phased else "") \
+        + (TRACE if traced else "") + f"TRACED = {traced}\nPHASED = {phased}\n" + CODE
     with tempfile.TemporaryDirectory(prefix="nlbeam-numba-cache-") as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache)
         subprocess.run([sys.executable, "-c", code, *order], env=env, check=True)

@@ -122,9 +122,15 @@ def _loop_for(want_var):
     store_every-th grid point, t0 and t_end included.
     With want_var, P, dvm and the rows of SR and SE carry the derivative of the map as
     computed: every step size and step time that depends on the state is differentiated too
-    (sens_steps.py, events_sens.py)."""
+    (sens_steps.py, events_sens.py).
+    The two loops get names of their own (``_integrate_loop_plain``, ``_integrate_loop_var``)
+    before numba sees them: numba names a compiled function by its qualified name, argument
+    types and a count of the compiles in its process, and the two closures' compiles come out
+    the same in two fresh processes (the 50th compile in each): a variational kernel compiled
+    in one process and loaded from the disk cache into a process holding the plain loop
+    called the plain loop (no monodromy: every shooting solve failed). Their disk-cache index
+    files are separate too."""
 
-    @njit(cache=True)
     def _integrate_loop(sysa, xc, xp, xtab, cfg, out, work):
         """The loop (``_loop_for``): the bundles' fields as local names, then the steps."""
         meth, t0, t_end, dt, spc = cfg.meth, cfg.t0, cfg.t_end, cfg.dt, cfg.spc
@@ -750,7 +756,9 @@ def _loop_for(want_var):
         fcounters[1] = max_land
         return status
 
-    return _integrate_loop
+    _integrate_loop.__name__ += "_var" if want_var else "_plain"
+    _integrate_loop.__qualname__ = _integrate_loop.__name__
+    return njit(cache=True)(_integrate_loop)
 
 
 _loop_plain = _loop_for(False)

@@ -4,9 +4,14 @@ by a run without monodromies, and pool workers forked after nlbeam.app.warmup.pr
 compiling nothing. Counted in fresh processes (numba's per-dispatcher cache hits and
 misses), not timed."""
 import json
+import os
 import subprocess
 import sys
 import textwrap
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
 
 import nlbeam
 from nlbeam.integrate import compile_kernels
@@ -15,6 +20,7 @@ from helpers import TINY_STOCHASTIC
 
 _REPORT = """
 import json
+import os
 import numba
 import nlbeam._kernels as K
 import stochastic._kernels as S
@@ -123,3 +129,93 @@ def test_a_scene_leaves_one_signature_per_kernel(tmp_path):
     assert got["integrate_plain"][2] == 0 and got["integrate_var"][2] == 0  # none compiled
     several = {name: v for name, v in got.items() if v[0] > 1}
     assert not several, f"kernels compiled for more than one argument type: {several}"
+
+
+_TINY = '''
+from numba import njit
+
+@njit(cache=True)
+def tiny(x):
+    return 3.0 * x + 1.0
+'''
+
+
+def _tiny_run(tmp_path, cache, code):
+    """The JSON printed last by ``code`` in a fresh interpreter that imports the module
+    ``tiny_kernel`` (written into tmp_path) with numba's cache in ``cache``."""
+    out = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
+                         text=True, cwd=tmp_path,
+                         env=dict(os.environ, NUMBA_CACHE_DIR=str(cache),
+                                  PYTHONPATH=os.pathsep.join([str(tmp_path)] + sys.path)))
+    assert out.returncode == 0, out.stderr[-3000:]
+    return json.loads(out.stdout.splitlines()[-1])
+
+
+def test_a_kernel_compiled_with_another_numba_cache_folder_is_adopted_and_loaded(tmp_path):
+    # what prepare_kernels does with the variational kernel compiled in a second process:
+    # that process's cache entry copied into this process's folder, then loaded, not compiled
+    (tmp_path / "tiny_kernel.py").write_text(_TINY)
+    theirs, mine = tmp_path / "theirs", tmp_path / "mine"
+    there = _tiny_run(tmp_path, theirs, """
+        import json
+        from tiny_kernel import tiny
+        tiny(2.0)
+        print(json.dumps([tiny._cache._cache_path, sum(tiny.stats.cache_misses.values())]))
+    """)
+    assert there[1] == 1   # compiled there
+    here = _tiny_run(tmp_path, mine, f"""
+        import json
+        from nlbeam.app.warmup import adopt_cached
+        from tiny_kernel import tiny
+        n = adopt_cached(tiny, {there[0]!r})
+        again = adopt_cached(tiny, {there[0]!r})   # the same entry: overwritten, not added
+        value = tiny(2.0)
+        print(json.dumps([n, again, value, sum(tiny.stats.cache_hits.values()),
+                          sum(tiny.stats.cache_misses.values()), len(tiny.signatures)]))
+    """)
+    assert here == [1, 1, 7.0, 1, 0, 1]   # loaded from the adopted entry, nothing compiled
+    # an entry of another source (the file edited since) is not adopted: compiled anew
+    (tmp_path / "tiny_kernel.py").write_text(_TINY.replace("3.0 * x", "4.0 * x") + "\n")
+    edited = _tiny_run(tmp_path, tmp_path / "third", f"""
+        import json
+        from nlbeam.app.warmup import adopt_cached
+        from tiny_kernel import tiny
+        n = adopt_cached(tiny, {there[0]!r})
+        print(json.dumps([n, tiny(2.0), sum(tiny.stats.cache_misses.values())]))
+    """)
+    assert edited == [0, 9.0, 1]
+
+
+@pytest.mark.slow
+def test_a_variational_kernel_from_a_second_process_integrates_the_monodromy(tmp_path):
+    # session 11's empty diagrams: the variational kernel compiled in a second process and
+    # loaded here beside the plain one compiled here ran the plain loop (both loops were one
+    # closure, whose compiled name came out the same in both processes), so the monodromy
+    # stayed unintegrated. Both kernels compiled from an empty numba cache as a scene run
+    # does it (second process forced); the monodromy of a linear oscillator over 0.1 s (a stop
+    # far out of reach) against its matrix exponential.
+    wn, zeta, T = 2 * np.pi * 20.0, 0.02, 0.1
+    got = subprocess.run([sys.executable, "-c", textwrap.dedent(f"""
+        import json
+        import numpy as np
+        import nlbeam
+        from nlbeam.app import warmup
+        warmup._cores = lambda: 2
+        n = warmup.prepare_kernels([{{"analysis": "periodic", "model": {{"name": "BeamImpact"}},
+                                     "periodic": {{"stability": True}}}}])
+        k = nlbeam.BeamImpact.paper().kernels()
+        st = k.integrate_var.stats
+        m = nlbeam.System([[1.0]], [[2 * {zeta} * {wn}]], [[{wn} ** 2]], elements=(
+            nlbeam.PiecewiseLinearStop(0, k=1e6, gap=1.0),))
+        f = nlbeam.flow(m, nlbeam.Harmonic(1e-4, 25.0), [1e-3, 0.0], 0.0, {T}, monodromy=True)
+        print(json.dumps([n, sum(st.cache_hits.values()), sum(st.cache_misses.values()),
+                          np.asarray(f.monodromy).tolist()]))
+    """)], capture_output=True, text=True,
+        env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache")))
+    assert got.returncode == 0, got.stderr[-3000:]
+    n, hits, misses, mono = json.loads(got.stdout.splitlines()[-1])
+    assert n == 2 and hits == 1 and misses == 0   # adopted from the second process, loaded
+    A = np.array([[0.0, 1.0], [-wn * wn, -2 * zeta * wn]])
+    scale = np.diag([1.0, wn])   # (m, m/s) -> comparable units
+    err = np.linalg.inv(scale) @ (np.array(mono) - expm(A * T)) @ scale
+    assert np.abs(err).max() < 1e-8, (mono, expm(A * T))

@@ -18,6 +18,7 @@ from ..files import remove_stale_temporaries, write_text_atomic
 from ..progress import Progress
 from ..sweeps import run_jobs
 from ..warmup import prepare_kernels
+from .empty import check_not_empty
 from .outputs import write_outputs
 from .plan import CACHE_DIR, entry_record, plan
 from .schema import Scene, build_model, build_noise, load_scene
@@ -218,7 +219,9 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
               quiet=False, log=None):
     """Validate, plan, compute what is missing (sweep points in parallel, see
     nlbeam.app.sweeps.run_jobs), cache it, and write the figures and tables atomically.
-    Returns a RunReport. ``log``: callable(str) for progress lines (default stderr)."""
+    A diagram that came out empty (every solve failed) raises EmptyDiagramError naming the
+    scene, uncached and undrawn (``empty.check_not_empty``). Returns a RunReport. ``log``:
+    callable(str) for progress lines (default stderr)."""
     t0 = time.perf_counter()
     scene = path_or_scene if isinstance(path_or_scene, Scene) else load_scene(path_or_scene)
     out_dir = os.fspath(out_dir)
@@ -255,11 +258,12 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
     parallel = scheduler is not None or (
         scene.sweep is not None and len(todo) > 1 and min(w or os.cpu_count() or 1,
                                                           len(todo)) > 1)
-    if parallel and scheduler is None:  # the kernels here, before the pool forks its workers
+    if todo and scheduler is None:  # the kernels here (before a pool forks its workers)
         prepare_kernels([j.inputs for j in todo])
     if parallel:
         outs = _run_parallel(todo, w, scheduler, show, quiet, name_of)
         for j, (r, warned) in zip(todo, outs):
+            check_not_empty(scene, j, r, warned)
             store_result(j, r, log, warned)
             results[j.path] = r
     else:
@@ -276,6 +280,7 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
             t = time.perf_counter()
             r, warned = compute_recorded(inputs)
             show.close()
+            check_not_empty(scene, j, r, warned)
             store_result(j, r, log, warned)
             results[j.path] = r
             log(f"nlbeam:   done in {time.perf_counter() - t:.1f} s")
