@@ -219,3 +219,35 @@ def test_a_variational_kernel_from_a_second_process_integrates_the_monodromy(tmp
     scale = np.diag([1.0, wn])   # (m, m/s) -> comparable units
     err = np.linalg.inv(scale) @ (np.array(mono) - expm(A * T)) @ scale
     assert np.abs(err).max() < 1e-8, (mono, expm(A * T))
+
+
+def _compiled_functions():
+    """Every numba dispatcher defined at module level in the compiled packages."""
+    import importlib
+    import pkgutil
+
+    import numba
+
+    import nlbeam._kernels as K
+
+    mods = [importlib.import_module(f"nlbeam._kernels.{m.name}")
+            for m in pkgutil.iter_modules(K.__path__)]
+    mods += [importlib.import_module(m) for m in ("nlbeam._linalg", "stochastic._kernels")]
+    for mod in mods:
+        for name, d in vars(mod).items():
+            if isinstance(d, numba.core.registry.CPUDispatcher):
+                yield f"{mod.__name__}.{name}", d
+
+
+def test_no_two_compiled_functions_share_a_qualified_name():
+    # numba names a function's machine code by module, qualified name, argument types and a
+    # count of the compiles in its process: two functions of one name (closures of one
+    # factory) compiled in two processes can come out as one symbol, and a process that loads
+    # both from the disk cache runs one function's code for both (session 11's variational
+    # kernel ran the plain loop). Each function is listed under every name it is imported as.
+    seen = {}
+    for where, d in _compiled_functions():
+        seen.setdefault((d.py_func.__module__, d.py_func.__qualname__), set()).add(id(d))
+    shared = {k: len(v) for k, v in seen.items() if len(v) > 1}
+    assert not shared, f"compiled functions sharing a qualified name: {shared}"
+    assert ("nlbeam._kernels.loop", "_integrate_loop_var") in seen
