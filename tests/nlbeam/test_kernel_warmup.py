@@ -218,7 +218,9 @@ def test_a_variational_kernel_from_a_second_process_integrates_the_monodromy(tmp
     A = np.array([[0.0, 1.0], [-wn * wn, -2 * zeta * wn]])
     scale = np.diag([1.0, wn])   # (m, m/s) -> comparable units
     err = np.linalg.inv(scale) @ (np.array(mono) - expm(A * T)) @ scale
-    assert np.abs(err).max() < 1e-8, (mono, expm(A * T))
+    # RK4 at the default step: 5.2e-7 from expm; a monodromy never integrated (the identity)
+    # is 0.22 off
+    assert np.abs(err).max() < 1e-5, (mono, expm(A * T))
 
 
 def _compiled_functions():
