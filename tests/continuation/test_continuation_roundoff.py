@@ -287,10 +287,12 @@ def test_grazing_points_within_each_others_bracket_are_merged():
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="the tracer's path still depends on round-off (issue 13 "
                    "item 4; measured on s12-roundoff with benchmarks/roundoff_structure.py: "
-                   "x (1 + 1e-13) 3 unmatched bifurcations before the order-3 declaration "
-                   "(s11-fold: 5 / 4 / 4)): the order-2 fold-grazing point 9.6642 Hz (a fold "
-                   "on each side of the corner, the far one located in one run only: 9.663664 "
-                   "+- 2.4e-4 in the reference). Gone: the order-1 grazing estimate at 9.3342 Hz "
+                   "x (1 +- 1e-13), A x (1 + 1e-13), dt_scale 1 - 1e-9: 1 / 1 / 3 / 27 unmatched "
+                   "bifurcations (s11-fold: 5 / 4 / 4 / 29)): the fold/flip-grazing points at "
+                   "9.6640-9.6643 Hz (order 2: a fold on each side of the corner, the far one "
+                   "located in one run only, 9.663664 +- 2.4e-4 in the reference; order 1 under "
+                   "A: the PD at the grazing point 9.664019 against 9.664252). Gone: the "
+                   "order-1 grazing estimate at 9.3342 Hz "
                    "(accuracy._grazing_bisect scans past failed solves), 110.83-110.90 Hz (a "
                    "'stop' end inside a declared stretch widens it), and s11's 9.168 / 6.648 / "
                    "66.5 / 67.5 Hz: remove when it passes")
