@@ -424,9 +424,19 @@ def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60, wid
         for s in (-1.0, 1.0):
             try:
                 u_s, n_s = solve(u_mid, p0 + s * d)
+                lost = False
             except ConvergenceError:
-                continue
-            if n_s != n_mid:
+                # no orbit near p0's there (e.g. past a fold of p0's strand): what lies
+                # between the last width tried and this one is scanned all the same (the
+                # paper model's 9.3342 Hz grazing point at the halved step: its change lies in
+                # a stretch 1.5e-4 Hz wide between the strand's fold and the level's corner;
+                # the widths tried, which depend on the diagram's bracket, stepped over it
+                # into the failures below the fold in one run and not in another)
+                if not widen or d_prev == 0.0:
+                    continue
+                u_s = n_s = None
+                lost = True
+            if lost or n_s != n_mid:
                 near = (p0, u_mid, n_mid)
                 if not widen:  # the diagram's own bracket: one change in it, or a cluster
                     _one_change_in(solve, u_mid, n_mid, p0, s * d, n_scan)
@@ -444,6 +454,8 @@ def _grazing_bisect(prob, u0, p0, width, resolution, tol=1e-10, max_iter=60, wid
                         break
                     near = (p0 + s * q, u_q, n_q)
                 else:
+                    if lost:
+                        continue  # no change on this side up to this width
                     q = d
                 lo, hi = sorted([near, (p0 + s * q, u_s, n_s)], key=lambda x: x[0])
                 break

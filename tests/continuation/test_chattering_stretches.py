@@ -155,3 +155,30 @@ def test_a_flickering_count_beside_the_grazing_point_is_one_side():
     # without the far side's count the nearest change is a flicker (another event)
     with pytest.raises(ConvergenceError, match="another change"):
         _grazing_bisect(level1, np.zeros(2), 6.64762, 2.8e-4, 1e-9, expect=(5, 3))
+
+
+def test_a_branch_that_runs_onto_another_inside_a_stretch_widens_it():
+    """Two branches of order 3 meet where one gave up (110.717, step underflow) and the other
+    ran onto it (110.6965, 'stop'): which of the two traces gives up there and which goes on
+    is up to round-off (the paper model, parameters x (1 + 1e-13): the second one stuck at a
+    corner at 110.896 Hz instead). The stretch then grows over the stopped branch's events
+    chained from its edges (110.834 -> 110.877 -> 110.900 -> 110.9585 Hz: each within 1e-3 of
+    f of the next; 111.2 Hz is not), so that both runs declare 110.83-110.96 Hz; a 'stop' end
+    outside every stretch declares nothing."""
+    from continuation.diagram import CHATTER_REACH, Bifurcation, FrequencyResponse
+    ev = [110.8342, 110.8768, 110.9001, 110.9585, 111.2]
+    bifs = [Bifurcation("fold", f, f, 1e-4, 3, 1, 1e-9, None) for f in ev]
+    frc = FrequencyResponse({}, 1e-4, "frequency", (100.0, 150.0),
+                            branches=[_branch(105.0, 110.717, ("left the parameter range",
+                                                               "step underflow"), 3),
+                                      _branch(110.6965, 150.0, ("stop",
+                                                                "left the parameter range"), 3)],
+                            bifurcations=bifs)
+    ((o, lo, hi, what),) = frc.unresolved()
+    assert o == 3 and lo == pytest.approx(110.717 * (1 - CHATTER_REACH))
+    assert hi == pytest.approx(110.9585 * (1 + CHATTER_REACH)) and hi < 111.2
+    assert "branch 2 runs onto another at 110.697 inside it; 4 of its" in what
+    # the same 'stop' end away from the give-up end (outside its stretch): nothing more
+    frc.branches[1] = _branch(110.5, 150.0, ("stop", "left the parameter range"), 3)
+    ((o, lo, hi, what),) = frc.unresolved()
+    assert hi == pytest.approx(110.717 * (1 + CHATTER_REACH)) and "runs onto" not in what
