@@ -125,7 +125,13 @@ def crossing(tr, prob, a, z_a, t_in, dps):
                 zs, evs, _ = tr.correct(prob, np.r_[g, z_a[-1] + sp * dp], e_p, a.corr,
                                         fixed_p=True)
             except ConvergenceError:
+                if tr.debug:
+                    print("  kink: no solution at p %.9g" % ((z_a[-1] + sp * dp) * prob.scale_p))
                 continue
+            if tr.debug:
+                print("  kink: p %.9g impacts %d (a: %d), distance %.3g" % (
+                    zs[-1] * prob.scale_p, evs.n_impacts, a.n_impacts,
+                    np.max(np.abs(zs[:-1] - z_a[:-1]))))
             if (evs.n_impacts != a.n_impacts
                     or np.max(np.abs(zs[:-1] - z_a[:-1])) > tr.jump_max_distance):
                 continue
@@ -135,7 +141,10 @@ def crossing(tr, prob, a, z_a, t_in, dps):
                 t_b = tangent(b.jac, zs - z_a)
             except np.linalg.LinAlgError:
                 continue
-            k = meet(tr, prob, z_a, t_a, zs, t_b)  # (None where the tangents are parallel:
+            k = meet(tr, prob, z_a, t_a, zs, t_b)
+            if tr.debug:
+                print("  kink: lines %s, meet %s" % (_closest(z_a, t_a, zs, t_b), k is not None))
+            # (None where the tangents are parallel:
             # b lies before the kink, on a's smooth stretch; a larger distance is tried)
             if k is not None:
                 b.tangent = t_b
