@@ -12,6 +12,7 @@ import numpy as np
 
 from nlbeam import _linalg as la
 from ._newton import ContinuationWarning, ConvergenceError
+from . import kinks
 from .corners import (JUMP_HS, Retrace, check_crossing, far_side, fold_ahead, map_jump,
                       smooth_fold_beside, tangent)
 
@@ -153,6 +154,12 @@ class Tracer:
     creep towards a corner that keeps the number of impacts is taken only where the
     multipliers moved by at most this, or every test function that changes sign on it is
     located on it; else a shorter one: see ``corners.far_side``).
+    Kinks (the map not smooth, the number of impacts the same; see continuation.kinks): where
+    failed steps at one point show one ahead (``kinks.signal``: the predictor's residual falls
+    only linearly with the step and the first Newton step multiplies it), after ``jump_after``
+    failures the kink is crossed from the far side once per point (``kinks.crossing``) at
+    the parameter distances ``kink_steps`` times the longest failed step's (scaled) and the
+    relative ``jump_steps``, nearest first; () turns this off.
 
     The corrector is a quasi-Newton iteration on the bordered system: the Jacobian at the
     predictor is dR/du from the variational equations (or, for a problem without them, the
@@ -181,8 +188,9 @@ class Tracer:
                  grazing_iter=8, grazing_ds=0.01, contraction=0.7, noise_tol=1e-7,
                  progress_points=40, progress_min=2e-3, label="branch", fold_margin=0.05,
                  turn_tol=1e-3, retrace_tol=0.1, corner_segments=(2, 4), probe_after=3,
-                 creep_mu_step=0.25, lazy_var=None):
+                 creep_mu_step=0.25, lazy_var=None, kink_steps=(2.0, 16.0)):
         self.p_min, self.p_max = p_min, p_max
+        self.kink_steps = tuple(kink_steps)
         self.creep_mu_step = creep_mu_step
         self.ds0, self.ds_min, self.ds_max = ds, ds_min, ds_max
         self.max_angle = max_angle
@@ -286,6 +294,7 @@ class Tracer:
         z_prev = ev_prev = None  # the previous iterate and its evaluation
         self.impacts_seen = set()
         self.iterates = []  # (z, number of impacts) of every iterate evaluated
+        self.residuals = []  # the scaled residual (max-norm) of every iterate evaluated
         base = None
         rate = None  # the last residual ratio (res / res_prev)
         lazy = (self.lazy_var if self.lazy_var is not None
@@ -311,6 +320,7 @@ class Tracer:
             self.iterates.append((z, ev.n_impacts))
             r = ev.R / w
             res = float(np.max(np.abs(r)))
+            self.residuals.append(res)
             if self.debug:
                 print("    it %d res %.2e imp %d var %s" % (it, res, ev.n_impacts, fresh))
             if not np.isfinite(res):
@@ -562,7 +572,9 @@ class Tracer:
         t_in = t.copy()  # the direction of travel at the last point (trial steps may change t)
         reason = "max_points"
         n_fail = 0
-        tried_jump = near_grazing = False
+        tried_jump = near_grazing = tried_kink = False
+        trials = []  # (ds, predictor residual, first iterate's) of failed steps at this point
+        # that kept its number of impacts (kinks.signal)
         ds_ok = ds
         self._creeps = 0
         self.unverified = None  # (problem, point, far-side candidate): see corners.far_side
@@ -647,6 +659,8 @@ class Tracer:
                 except ConvergenceError:
                     seen = set(self.impacts_seen)
                     iterates = list(self.iterates)
+                    if seen == {pts[-1].n_impacts} and len(self.residuals) >= 2:
+                        trials.append((ds, self.residuals[0], self.residuals[1]))
                 far = [zi for zi, ni in iterates if ni != pts[-1].n_impacts]
                 if far:
                     guesses.append(far[-1])
@@ -690,6 +704,25 @@ class Tracer:
                     else:  # not again before the branch has moved on (creeping to the corner)
                         far_failed = (prob, z[-1])
                     forced = False
+                kink = (None if jumped or tried_kink or not self.kink_steps
+                        or n_fail < self.jump_after else kinks.signal(trials, self.noise_tol))
+                if kink is not None:
+                    # a kink ahead that keeps the number of impacts: crossed from the far side
+                    # (continuation.kinks) rather than crept into by halved steps
+                    tried_kink = True
+                    d_fail = max(d for d, _, _ in trials) * abs(t_in[-1])
+                    unit = max(abs(z[-1]), 1e-3)
+                    dps = sorted({k * d_fail for k in self.kink_steps if k * d_fail > 0}
+                                 | {s * unit for s in self.jump_steps})
+                    res = kinks.crossing(self, prob, pts[-1], z, t_in, dps)
+                    if self.debug:
+                        print("kink ahead of p %.9g (%s): %s" % (
+                            z[-1] * wp, kink, "crossed to p %.9g" % (res[0][-1] * wp)
+                            if res is not None else "not crossed"))
+                    if res is not None:
+                        zn, evn, ptn, tn, _ = res
+                        jumped = True
+                        ds = ds_ok
                 last = self.unverified
                 far = (last is not None and last[0] is prob and last[1] is pts[-1])
                 if (not jumped and (ds < self.ds_min or (budget is not None and budget <= 0))
@@ -775,12 +808,14 @@ class Tracer:
                         w, wp = prob.scale_u, prob.scale_p
                         t_in = t.copy()
                         ds = min(ds_ok, self.grazing_ds)
-                        n_fail, tried_jump, guesses = 0, False, []
+                        n_fail, tried_jump, guesses, trials = 0, False, [], []
+                        tried_kink = False
                         forced, budget = True, 8  # far-side solves first, then a few steps
                     continue
-            tried_jump = near_grazing = False
+            tried_jump = near_grazing = tried_kink = False
             angle_rej = np.inf
             guesses = []
+            trials = []
             self.unverified = None
             if not jumped:
                 ds_ok = ds
@@ -873,7 +908,8 @@ class Tracer:
                 t_in = t.copy()
                 forced = True
                 ds = min(ds_ok, self.grazing_ds)
-                n_fail, tried_jump, guesses = 0, False, []
+                n_fail, tried_jump, guesses, trials = 0, False, [], []
+                tried_kink = False
                 continue
             if not (self.p_min <= pt.p <= self.p_max):
                 reason = "left the parameter range"
