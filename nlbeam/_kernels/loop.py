@@ -194,7 +194,6 @@ def _loop_for(want_var):
         h = h_init
         status = 0
         en = 1.0
-        h_free = 0.0    # DP5: the controller's step in free flight before the last contact
         # (typed int64 from the start: numba's first typing pass would otherwise see the literals
         # 0 and -1 and compile a dead copy of every step function for them, ~1/4 of the compile)
         phase = np.int64(0)  # 0: time steps; 1: onset, steps in sigma; 2: exit, steps in u
@@ -726,17 +725,7 @@ def _loop_for(want_var):
                     fac = min(5.0, max(0.2, 0.9 * en ** -0.2))
                 h = h * fac
                 if ev >= 0:
-                    # after an onset a short first step (the contact law's delta^1.5 start); back
-                    # in free flight the controller's step before the contact (the field is
-                    # smooth again; a first step of 1e-3 dt took ~5 steps to grow back)
-                    if disc[ev, 0] != 0.0:
-                        if n_in == 0:
-                            h_free = h
-                        h = min(h, max(1e-3 * dt, 1e-9))
-                    elif n_in == 1 and h_free > 0.0:
-                        h = max(h, h_free)
-                    else:
-                        h = min(h, max(1e-3 * dt, 1e-9))
+                    h = min(h, max(1e-3 * dt, 1e-9))
 
         for q in range(n):
             s_end[q] = s[q]
