@@ -308,3 +308,52 @@ def fade_join(zi, zp, win, out):
         out[j, 3] = (w3 * a0 + 3.0 * w2 * a1 + 3.0 * w1 * a2 + w0 * a3
                      + v3 * b0 + 3.0 * v2 * b1 + 3.0 * v1 * b2 + v0 * b3)
     return OK
+
+
+@njit(cache=True)
+def welch_segments(data, first, step, window, out):
+    """out[k] = (segment - its mean) * window for the segments data[first + k step:][:n],
+    k = 0 .. out.shape[0] - 1, n = window.size (one pass each instead of numpy's temporaries;
+    the mean summed in chunks of _CHUNK as block_moments). Returns OK."""
+    n = window.size
+    for k in range(out.shape[0]):
+        a = first + k * step
+        total = 0.0
+        for c in range(0, n, _CHUNK):
+            part = 0.0
+            for j in range(a + c, a + min(c + _CHUNK, n)):
+                part += data[j]
+            total += part
+        mean = total / n
+        for j in range(n):
+            out[k, j] = (data[a + j] - mean) * window[j]
+    return OK
+
+
+@njit(cache=True)
+def add_power(X, acc):
+    """acc[f] += sum_k |X[k, f]|^2 (the periodograms of a batch of segments, unscaled)."""
+    for k in range(X.shape[0]):
+        for f in range(X.shape[1]):
+            v = X[k, f]
+            acc[f] += v.real * v.real + v.imag * v.imag
+    return OK
+
+
+@njit(cache=True)
+def carrier_rows(s, scale, f0h, R, half, out):
+    """out[j, q] = Re(scale s[q, j] exp(2 pi i cyc_j)), cyc_j = (f0h (R j + half)) mod 1,
+    j = 0 .. out.shape[0] - 1: the coarse-grid line sums of noise._lines_nodes moved back
+    to their carrier frequency, node-major, in one pass (numpy: five temporaries of the whole
+    array). Returns OK."""
+    nr = out.shape[1]
+    for j in range(out.shape[0]):
+        c = f0h * (R * j + half)
+        c -= math.floor(c)
+        ph = 2.0 * math.pi * c
+        cr = math.cos(ph)
+        ci = math.sin(ph)
+        for q in range(nr):
+            v = s[q, j]
+            out[j, q] = (v.real * scale) * cr - (v.imag * scale) * ci
+    return OK

@@ -108,12 +108,13 @@ class WelchPSD:
             self._tail = data.copy()
             return self
         K = (data.size - self.nperseg) // self.step + 1
-        segs = np.lib.stride_tricks.sliding_window_view(data, self.nperseg)[:: self.step][:K]
         for a in range(0, K, self._max_batch):
-            s = segs[a: a + self._max_batch]
-            s = (s - s.mean(axis=1, keepdims=True)) * self.window
-            X = scipy.fft.rfft(s, axis=1)
-            self._acc += np.sum(X.real ** 2 + X.imag ** 2, axis=0)
+            # each segment less its mean, windowed, in one compiled pass (numpy's temporaries
+            # cost as much as the FFT of an 80000-sample segment), then its periodogram
+            s = np.empty((min(self._max_batch, K - a), self.nperseg))
+            _kernels.welch_segments(data, a * self.step, self.step, self.window, s)
+            X = scipy.fft.rfft(s, axis=1, overwrite_x=True)
+            _kernels.add_power(X, self._acc)
         self.n_segments += K
         self._tail = data[K * self.step:].copy()
         return self

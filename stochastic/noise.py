@@ -261,9 +261,11 @@ def _lines_nodes(f0, df, coeffs, h, m, n_fft, n_deriv=2):
         full = np.zeros((nr, pad), dtype=complex)
         full[:, :K] = rows
         spec[:] = full.reshape(nr, -1, M).sum(axis=1)
-    s = scipy.fft.ifft(spec, axis=1, overwrite_x=True)[:, :nc] * M
-    cyc = np.mod(f0 * h * (R * np.arange(nc) + half), 1.0)
-    D = np.ascontiguousarray((s * np.exp(2j * math.pi * cyc)).real.T)  # (nc, nr)
+    s = scipy.fft.ifft(spec, axis=1, overwrite_x=True)
+    # times M and the carrier exp(2 pi i f0 tau_c) at the coarse nodes tau_c = (R c + half) h,
+    # node-major (nc, nr), in one compiled pass
+    D = np.empty((nc, nr))
+    _kernels.carrier_rows(s, float(M), f0 * h, float(R), half, D)
     d = np.arange(R) - half
     n = np.arange(P + 1)
     T = d[None, :] ** n[:, None] / scipy.special.factorial(n)[:, None]  # (P + 1, R)
