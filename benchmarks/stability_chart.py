@@ -16,8 +16,10 @@ found; the grid needs the largest K, at the measured CPU cost of one diagram eac
                                                      figures/stability_chart_paper.png/.h5)
     python benchmarks/stability_chart.py --plot     (redraw the figure from the .h5)
     python benchmarks/stability_chart.py --curves   (the curves only, nothing saved: where
-                                                     their shooting evaluations go, by trace
-                                                     end and by use; the codim-2 points)
+                                                     their shooting evaluations and CPU go,
+                                                     by trace end and by use; the codim-2
+                                                     points; with --traces also one line per
+                                                     trace direction)
 """
 import os
 import sys
@@ -129,7 +131,8 @@ def curves_only():
     from continuation import curve as CU
 
     uses = collections.Counter()
-    traces = []  # (end, evaluations, impacts-per-period values on the points, kind, order)
+    traces = []  # (end, evaluations, impacts-per-period values on the points, kind, order,
+    #               CPU s, start (Hz, m), last point (Hz, m), points)
     corr, trace, locate = CU._Tracer.correct, CU._Tracer.trace, CU._locate
     where = []  # the innermost tallied caller
 
@@ -147,15 +150,17 @@ def curves_only():
             uses[use] += self.s.n_evaluations - n0
 
     def t_trace(self, p0, on_step):
-        n0 = self.s.n_evaluations
+        n0, c0 = self.s.n_evaluations, time.process_time()
         where.append("trace")
         try:
             pts, why = trace(self, p0, on_step)
         finally:
             where.pop()
+        last = ([p0] + pts)[-1]
         traces.append((why, self.s.n_evaluations - n0,
                        sorted({int(p.st.n_impacts) for p in [p0] + pts}), self.s.kind,
-                       self.s.order))
+                       self.s.order, time.process_time() - c0, (p0.frequency, p0.value),
+                       (last.frequency, last.value), len(pts)))
         return pts, why
 
     def t_locate(tr, *a, **k):
@@ -173,13 +178,14 @@ def curves_only():
     print(f"curves: {len(chart.curves)}, {sum(len(c.frequency) for c in chart.curves)} points, "
           f"{n_ev} shooting evaluations, {t_curves:.1f} s CPU; not traced or in part: "
           f"{len(chart.skipped)}")
-    ends = collections.defaultdict(lambda: [0, 0])
-    for why, ev, *_ in traces:
+    ends = collections.defaultdict(lambda: [0, 0, 0.0])
+    for why, ev, _, _, _, cpu, *_ in traces:
         ends[why.split(":")[0]][0] += 1  # 'corrector-limited: where' by its kind
         ends[why.split(":")[0]][1] += ev
-    print("trace directions by end (directions, evaluations):")
-    for why, (k, ev) in sorted(ends.items(), key=lambda kv: -kv[1][1]):
-        print(f"  {why:28s} {k:4d} {ev:7d} ({100 * ev / max(n_ev, 1):.0f} %)")
+        ends[why.split(":")[0]][2] += cpu
+    print("trace directions by end (directions, evaluations, CPU s):")
+    for why, (k, ev, cpu) in sorted(ends.items(), key=lambda kv: -kv[1][1]):
+        print(f"  {why:28s} {k:4d} {ev:7d} ({100 * ev / max(n_ev, 1):.0f} %) {cpu:6.1f} s")
     budget = [t for t in traces if t[0] == "max_evaluations"]
     for label, sel in (("one impacts-per-period value", [t for t in budget if len(t[2]) == 1]),
                        ("several values", [t for t in budget if len(t[2]) > 1])):
@@ -195,6 +201,13 @@ def curves_only():
           f"{dict(collections.Counter(s[0] for s in sp))}")
     for kind, f, v, ck, co in sp:
         print(f"  {kind:14s} {f:10.5f} Hz {v * 1e3:8.5f} mm   on the {ck} curve, order {co}")
+    if "--traces" in sys.argv:
+        print("trace directions (kind, order, start, last point, end, evaluations, CPU, "
+              "points, impacts per period):")
+        for why, ev, imp, kind, order, cpu, (f0, v0), (f1, v1), n in traces:
+            print(f"  {kind:15s} {order} {f0:9.4f} Hz {v0 * 1e3:7.4f} mm -> {f1:9.4f} Hz "
+                  f"{v1 * 1e3:8.5f} mm  {why.split(':')[0]:24s} {ev:5d} ev {cpu:5.2f} s "
+                  f"{n:4d} pts {imp}")
 
 
 if __name__ == "__main__":
