@@ -91,11 +91,22 @@ _ARRAYS = ("state", "disc", "xmax", "monodromy", "dstate_dvminus0", "dvminus_dst
 
 
 def _copy(flow):
-    """A copy of an nlbeam.Flow with copies of its arrays."""
-    out = copy.copy(flow)
+    """A copy of an nlbeam.Flow with copies of its arrays (its fields copied directly: a
+    Flow is a plain dataclass, and copy.copy's generic path costs more than the copies)."""
+    cls = type(flow)
+    if (cls.__reduce_ex__ is not object.__reduce_ex__ or hasattr(cls, "__copy__")
+            or getattr(cls, "__getstate__", None) is not getattr(object, "__getstate__", None)
+            or not hasattr(flow, "__dict__")):
+        out = copy.copy(flow)
+    else:
+        out = object.__new__(cls)
+        out.__dict__.update(flow.__dict__)
+    d = out.__dict__
     for name in _ARRAYS:
-        a = getattr(out, name)
-        if isinstance(a, np.ndarray):
+        a = d.get(name)
+        if type(a) is np.ndarray:
+            d[name] = a.copy()
+        elif isinstance(a, np.ndarray):
             setattr(out, name, a.copy())
     return out
 
@@ -108,8 +119,7 @@ def put(k, model, monodromy, flow):
         return
     flow = _copy(flow)
     size = OVERHEAD + len(k[8]) + (0 if k[11] is None else len(k[11][0][2]))
-    size += sum(getattr(flow, name).nbytes for name in _ARRAYS
-                if isinstance(getattr(flow, name), np.ndarray))
+    size += sum(a.nbytes for a in map(flow.__dict__.get, _ARRAYS) if isinstance(a, np.ndarray))
     with _lock:
         old = _flows.pop((k, bool(monodromy)), None)
         if old is not None:

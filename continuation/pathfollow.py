@@ -362,7 +362,7 @@ class Tracer:
             r_prev = r
             A = np.vstack([B, t[None, :]])
             try:
-                dz = la.solve(A, -np.r_[r, la.dot(t, z - zeta_pred)])
+                dz = la.solve(A, -np.concatenate((r, (la.dot(t, z - zeta_pred),))))
             except np.linalg.LinAlgError:
                 break
             dz_norm = float(np.max(np.abs(dz)))

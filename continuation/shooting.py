@@ -198,16 +198,27 @@ class ShootingProblem(Problem):
 
     # --- segments -----------------------------------------------------------------------------
     def forcing(self, p):
-        """(model, excitation) at parameter value p."""
+        """(model, excitation) at parameter value p (the last pair kept: a Harmonic is
+        immutable, and every flow of an evaluation asks for the same one)."""
         model, A, f = self.setup(p)
-        return model, forcing(A, f)
+        last = self.__dict__.get("_forcing")
+        if last is not None and last[0] is model and last[1] == A and last[2] == f:
+            return model, last[3]
+        ex = forcing(A, f)
+        self._forcing = (model, A, f, ex)
+        return model, ex
 
     # --- segments -----------------------------------------------------------------------------
     def _segments(self):
-        """(j, phase at its start, its length in excitation periods) of each segment."""
-        b = np.append(self.boundaries, self.boundaries[0] + self.order)
-        for j in range(self.n_seg):
-            yield j, b[j], b[j + 1] - b[j]
+        """(j, phase at its start, its length in excitation periods) of each segment (computed
+        once per boundaries and order)."""
+        key = (self.boundaries, self.order)
+        kept = self.__dict__.get("_segs")
+        if kept is None or kept[0][0] is not key[0] or kept[0][1] != key[1]:
+            b = np.append(self.boundaries, self.boundaries[0] + self.order)
+            kept = self._segs = (key, tuple((j, b[j], b[j + 1] - b[j])
+                                            for j in range(self.n_seg)))
+        return kept[1]
 
     def _flowmap(self, model, ex):
         """A FlowMap (nlbeam.integrate.FlowMap: nlbeam.flow without its per-call checks) of
@@ -348,7 +359,7 @@ class ShootingProblem(Problem):
         U = np.asarray(u, dtype=float).reshape(self.n_seg, self.N2)
         ends, Ms, xm = self._map(U, p, jac)
         n_imp = self.last_impacts
-        R = (ends - np.roll(U, -1, axis=0)).ravel()
+        R = (ends - (U if self.n_seg == 1 else np.roll(U, -1, axis=0))).ravel()
         Ju = self._assemble(Ms) if jac else None
         Jp = self._jac_p(U, p, ends) if jac_p else None
         return Evaluation(R, Ju, Jp, Ms if self.variational else [], xm, n_imp)
@@ -356,10 +367,13 @@ class ShootingProblem(Problem):
     def _assemble(self, Ms):
         Ju = np.zeros((self.n, self.n))
         k = self.N2
+        eye = self.__dict__.get("_eye")
+        if eye is None or eye.shape[0] != k:
+            eye = self._eye = np.eye(k)  # (read only here)
         for j in range(self.n_seg):
             Ju[j * k:(j + 1) * k, j * k:(j + 1) * k] += Ms[j]
             jn = (j + 1) % self.n_seg
-            Ju[j * k:(j + 1) * k, jn * k:(jn + 1) * k] -= np.eye(k)
+            Ju[j * k:(j + 1) * k, jn * k:(jn + 1) * k] -= eye
         return Ju
 
     def _jac_p(self, U, p, ends):
@@ -382,7 +396,8 @@ class ShootingProblem(Problem):
         if ev is None:
             ends = self._map(U, p, False)[0]
         else:
-            ends = ev.R.reshape(self.n_seg, self.N2) + np.roll(U, -1, axis=0)
+            ends = ev.R.reshape(self.n_seg, self.N2) + (U if self.n_seg == 1
+                                                         else np.roll(U, -1, axis=0))
         return self._jac_p(U, p, ends)
 
     # --- derived quantities -----------------------------------------------------------------

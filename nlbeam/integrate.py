@@ -2,7 +2,6 @@
 (the end state of one interval, optionally with its monodromy matrix)."""
 from __future__ import annotations
 
-import copy
 import math
 from dataclasses import dataclass
 
@@ -409,7 +408,8 @@ class FlowMap:
     def retarget(self, excitation):
         """This map for another excitation (same model, method, dt, tolerances): only the
         excitation's kernel arguments are renewed."""
-        new = copy.copy(self)
+        new = object.__new__(FlowMap)  # (not copy.copy: that would pickle the state and look
+        new.__dict__.update(self.__dict__)  # the kernels up again, see __setstate__)
         new.excitation = excitation
         new.xc, new.xp, new.xtab = excitation.kernel_args()
         new.span = excitation.time_span()
@@ -449,17 +449,23 @@ class FlowMap:
             _check_steps("flow", duration, dt, self.method, max_steps)
         dt = self.solver.whole_step(duration, dt)
         N, ne = self.N, self.ne
-        s0 = _state(self.model, state0, "state0")
+        if (type(state0) is np.ndarray and state0.dtype == np.float64
+                and state0.shape == (2 * N,)):  # the fast path of _state: the same checks
+            s0 = state0.copy()
+            if not np.isfinite(s0).all():
+                s0 = _state(self.model, s0, "state0")  # (raises)
+        else:
+            s0 = _state(self.model, state0, "state0")
         if disc0 is None:
             disc = self._disc(s0, t0)
         else:
             disc = np.array(disc0, dtype=float).reshape(ne, 2)
-        in_contact = bool(np.any(disc[:, 0] != 0))
+        in_contact = bool((disc[:, 0] != 0).any())
         P0, dvm0 = _sensitivity_seed(N, ne, in_contact, monodromy)
         s_end = np.empty(2 * N)
         disc_end = np.empty((ne, 2))
-        P_end = np.empty_like(P0)
-        dvm_end = np.empty_like(dvm0)
+        P_end = np.empty(P0.shape)
+        dvm_end = np.empty(dvm0.shape)
         xmax = np.zeros(N)
         c = np.zeros(9, dtype=np.int64)
         fc = np.zeros(2)
