@@ -220,7 +220,15 @@ class ToyProblem(Problem):
     """Base of the synthetic problems on the tracer's protocol (continuation.pathfollow.Problem)
     that give one monodromy matrix per evaluation: multipliers its eigenvalues, largest modulus
     first (stable order); no adaptation; ``on_branch(u, p)``: the residual's largest entry (for
-    the tests' own checks)."""
+    the tests' own checks); two unknowns with unit scales; ``side(u)``: which side of the
+    switching surface u[0] = 0 the state lies on (0 below, 1 on or above)."""
+
+    def __init__(self):
+        self.scale_u = np.ones(2)
+        self.scale_p = 1.0
+
+    def side(self, u):
+        return int(u[0] >= 0.0)
 
     def multipliers(self, Ms):
         mu = np.linalg.eigvals(Ms[0])

@@ -21,11 +21,7 @@ class PiecewiseLinear(ToyProblem):
     def __init__(self, A0, a, b):
         self.A = [np.asarray(A0, float), np.asarray(A0, float) + np.outer(a, [1.0, 0.0])]
         self.b = np.asarray(b, float)
-        self.scale_u = np.ones(2)
-        self.scale_p = 1.0
-
-    def side(self, u):
-        return int(u[0] >= 0.0)
+        super().__init__()
 
     def evaluate(self, u, p, jac=True, jac_p=True):
         s = self.side(u)

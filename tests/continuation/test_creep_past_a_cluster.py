@@ -25,10 +25,6 @@ class ClusterAhead(ToyProblem):
     below the window (the period doubling at P_PD), 0.6 and 0.2 inside it, a complex pair
     1.05 e^(+-2i) beyond it."""
 
-    def __init__(self):
-        self.scale_u = np.ones(2)
-        self.scale_p = 1.0
-
     @staticmethod
     def monodromy(p):
         if p < WINDOW[0]:

@@ -21,12 +21,8 @@ class FoldThenCorner(ToyProblem):
     passes it straight."""
 
     def __init__(self, k, uf, g=-1.0):
+        super().__init__()
         self.k, self.uf, self.g = k, uf, g
-        self.scale_u = np.ones(2)
-        self.scale_p = 1.0
-
-    def side(self, u):
-        return int(u[0] >= 0.0)
 
     def evaluate(self, u, p, jac=True, jac_p=True):
         s = self.side(u)
@@ -98,12 +94,6 @@ class StrandBehind(ToyProblem):
     r = p - 0.021 - u1 / 10 (strand B, p = 0.0195 .. 0.021); u1 >= 0 (1 impact):
     r = u1 + p - 0.021. B and the 1-impact strand meet at a corner (u1 = 0, p = 0.021,
     a non-smooth fold: dr/du1 changes sign); A meets neither."""
-
-    scale_u = np.ones(2)
-    scale_p = 1.0
-
-    def side(self, u):
-        return int(u[0] >= 0.0)
 
     def evaluate(self, u, p, jac=True, jac_p=True):
         if u[0] < -0.015:

@@ -27,10 +27,6 @@ MU = np.diag([0.5, 0.3])  # multipliers (no bifurcation anywhere)
 
 class KinkAhead(ToyProblem):
 
-    def __init__(self):
-        self.scale_u = np.ones(2)
-        self.scale_p = 1.0
-
     def evaluate(self, u, p, jac=True, jac_p=True):
         u = np.asarray(u, float)
         d = u[0] - P_K
