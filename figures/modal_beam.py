@@ -60,7 +60,7 @@ def psd_map(scene, plt):
     import continuation
     import stochastic
 
-    from nlbeam.app.compare import map_peaks
+    from nlbeam.app.compare import map_peaks, welch_dof_of
     from nlbeam.app.plots.compare import plot_comparison
     from nlbeam.app.scenes import plan
     from nlbeam.app.scenes.schema import build_noise
@@ -70,7 +70,7 @@ def psd_map(scene, plt):
     res = stochastic.load(jobs["stochastic"].path)
     psd = res.psd("delta")
     noise = build_noise(scene.stochastic)
-    kw = dict(background_hz=40.0, f_range=(5.0, 200.0))
+    kw = dict(background_hz=40.0, f_range=(5.0, 200.0), dof=welch_dof_of(res, "delta"))
     matches = map_peaks(psd, frc, noise, **kw)
     fig = plot_comparison(psd, frc, matches, excitation=noise, f_max=200.0, **kw)
     fig.axes[0].set_title("ModalBeam (N = 4), 0-200 Hz: PSD peaks of delta mapped onto the diagram")

@@ -391,7 +391,7 @@ def _compare(args):
     import continuation
     import stochastic
 
-    from .compare import map_peaks
+    from .compare import map_peaks, welch_dof_of
 
     res = stochastic.load(args.stochastic)
     frc = continuation.load(args.diagram)
@@ -401,7 +401,7 @@ def _compare(args):
         raise ValueError(f"--f-max: must be > 0 Hz, got {args.f_max:g}")
     f_range = None if args.f_max is None else (0.0, args.f_max)
     matches = map_peaks(res.psd(args.channel), frc, band, min_prominence=args.min_prominence,
-                        f_range=f_range)
+                        f_range=f_range, dof=welch_dof_of(res, args.channel))
     if not args.quiet:
         print(f"{'peak Hz':>9s} {'prom dec':>8s} {'kind':14s} {'order':>5s} "
               f"{'branch f Hz':>11s} {'stable':>6s} {'dist Hz':>7s}  note")

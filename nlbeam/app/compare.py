@@ -7,15 +7,19 @@ Front door: :func:`map_peaks` (PSD peaks -> :class:`PeakMatch` list); its figure
 The matching rule (paper sections 5 and 7)
 ------------------------------------------
 *Peaks.* ``L = log10 P`` is compared with its running median over ``background_hz`` (the
-local background); a peak is a local maximum of ``L - median`` that stands above the
-background, and has a topographic prominence, of at least ``thr`` decades, where
-``thr = max(min_prominence, 5 * scatter)`` and ``scatter`` is the bin-to-bin scatter of
-``L - median`` (robust estimate), so Welch noise does not make peaks. The
-``prominence`` reported is that of ``L - median``, in decades.
+local background); a peak is a local maximum of ``L - median`` whose prominence (and height
+above the background) exceeds ``min_prominence`` by ``confidence`` standard errors of the
+estimate (``stochastic.peaks``: the larger of the Welch estimate's chi-square scatter, given
+its degrees of freedom ``dof``, and the PSD's measured bin-to-bin scatter), so Welch noise
+does not make peaks and the same peaks come out of another record of the same length. The
+``prominence`` reported is that of ``L - median``, in decades, with ``prominence_error``;
+``frequency_error`` is how far the top may lie from the bin found (the bins within one
+standard error of the top).
 
 *Tolerance.* A peak is explained by a diagram point whose response frequency lies within
-``tol = max(tol_bins * df, half width at half prominence of the peak)`` (Hz), unless
-``tolerance`` (Hz) is given. ``distance`` is ``|response frequency of the point - peak|``.
+``tol = max(tol_bins * df, half width at half prominence of the peak, frequency_error)``
+(Hz), unless ``tolerance`` (Hz) is given. ``distance`` is ``|response frequency of the
+point - peak|``.
 
 *Where a branch resonates.* On each branch, the local maxima of ``xmax`` along the path
 (prominence >= 5 % of the branch's largest xmax; on a hardening resonance the top fold) and
@@ -81,8 +85,10 @@ import numpy as np
 from nlbeam._validate import (ArgumentTypeError, integer, interval, nonnegative, positive,
                               real_array)
 from nlbeam.summary import Summary
+from stochastic.peaks import DEFAULT_CONFIDENCE, significant_peaks
 
-__all__ = ["PeakMatch", "Resonance", "map_peaks", "find_peaks", "resonances", "KINDS"]
+__all__ = ["PeakMatch", "Resonance", "map_peaks", "find_peaks", "resonances", "welch_dof_of",
+           "KINDS"]
 
 KINDS = ("harmonic", "subharmonic", "superharmonic", "asymmetry", "unexplained")
 
@@ -116,7 +122,11 @@ class PeakMatch(Summary):
     (m); note: "resonance", "multiple" or "forced" (the step that explained the peak, ""
     for asymmetry and unexplained); explained_by: the parent peak of a multiple (Hz, NaN
     otherwise); response_frequency: where the explanation puts the peak (Hz, NaN if none);
-    alternatives: other explanations within tolerance."""
+    alternatives: other explanations within tolerance; frequency_error (Hz) and
+    prominence_error (decades): one-standard-deviation errors of the peak's frequency and
+    prominence in the PSD estimate; significance: standard errors by which the prominence
+    clears ``min_prominence`` (``stochastic.peaks``; a peak near ``confidence`` may be
+    missing from another record of the same length)."""
 
     frequency: float
     prominence: float
@@ -133,10 +143,16 @@ class PeakMatch(Summary):
     explained_by: float = math.nan
     response_frequency: float = math.nan
     alternatives: tuple = field(default=(), compare=False)
+    frequency_error: float = math.nan
+    prominence_error: float = math.nan
+    significance: float = math.nan
 
     def as_row(self) -> dict:
         """Plain dict for tables (CSV)."""
-        return {"frequency_hz": self.frequency, "prominence_dec": self.prominence,
+        return {"frequency_hz": self.frequency, "frequency_error_hz": self.frequency_error,
+                "prominence_dec": self.prominence,
+                "prominence_error_dec": self.prominence_error,
+                "significance": self.significance,
                 "kind": self.kind, "order": self.order,
                 "branch_frequency_hz": self.branch_frequency,
                 "stable": "" if self.stable is None else bool(self.stable),
@@ -151,38 +167,30 @@ def _odd(n):
     return n if n % 2 else n + 1
 
 
-def find_peaks(psd, *, min_prominence=0.3, background_hz=20.0, tol_bins=2.0, f_range=None):
-    """Peaks of a PSD ``(f, P)`` against its running median in log10.
-    Returns (indices, prominences in decades, half widths in Hz, background log10 P)."""
-    from scipy.ndimage import median_filter
-    from scipy.signal import find_peaks as _fp
-    from scipy.signal import peak_widths
+def find_peaks(psd, *, min_prominence=0.3, background_hz=20.0, tol_bins=2.0, f_range=None,
+               dof=None, confidence=DEFAULT_CONFIDENCE):
+    """Peaks of a PSD ``(f, P)`` against its running median in log10, by the significance
+    rule of ``stochastic.peaks`` (``dof``: the Welch estimate's degrees of freedom, a number
+    or one per bin; None: the measured scatter alone). Returns (indices, prominences in
+    decades, half widths in Hz, background log10 P); ``significant_peaks`` gives the
+    errors as well."""
+    ps = significant_peaks(*psd, dof, min_prominence=min_prominence, confidence=confidence,
+                           background_hz=background_hz, distance_bins=tol_bins,
+                           f_range=f_range)
+    return ps.index, ps.prominence, ps.half_width, ps.background
 
-    f, P = (np.asarray(a, dtype=float) for a in psd)
-    if f.ndim != 1 or f.shape != P.shape or f.size < 5:
-        raise ValueError(f"psd: must be a pair (f, P) of equal 1-D arrays with >= 5 points, "
-                         f"got shapes {f.shape} and {P.shape}")
-    if not (np.all(np.isfinite(f)) and np.all(np.isfinite(P))) or np.any(P < 0):
-        raise ValueError("psd: frequencies and P must be finite, P >= 0")
-    df = float(np.median(np.diff(f)))
-    if not df > 0:
-        raise ValueError("psd: frequencies must increase")
-    floor = max(P.max(), 1e-300) * 1e-16
-    L = np.log10(np.maximum(P, floor))
-    bg = median_filter(L, size=_odd(round(background_hz / df)), mode="nearest")
-    r = L - bg
-    scatter = 1.4826 * float(np.median(np.abs(np.diff(r)))) / math.sqrt(2.0)
-    thr = max(float(min_prominence), 5.0 * scatter)
-    idx, props = _fp(r, height=thr, prominence=thr, distance=max(1, int(round(tol_bins))))
-    if f_range is not None:
-        keep = (f[idx] >= f_range[0]) & (f[idx] <= f_range[1])
-        idx = idx[keep]
-        props = {k: v[keep] for k, v in props.items()}
-    widths = np.zeros(0)
-    if idx.size:
-        widths = peak_widths(r, idx, rel_height=0.5, prominence_data=(
-            props["prominences"], props["left_bases"], props["right_bases"]))[0]
-    return idx, props["prominences"], 0.5 * widths * df, bg
+
+def welch_dof_of(result, ch):
+    """The Welch degrees of freedom per bin of channel ``ch``'s PSD in a
+    ``stochastic.StochasticResult`` (2 / relative_std^2), for ``map_peaks(dof=...)``; None
+    when the result does not carry them (then the PSD's measured scatter is used alone)."""
+    try:
+        rs = np.asarray(result.psd_relative_std(ch), dtype=float)
+    except (AttributeError, KeyError, ValueError, TypeError):
+        return None
+    if rs.ndim != 1 or rs.size == 0 or not np.all(np.isfinite(rs) & (rs > 0)):
+        return None
+    return 2.0 / rs ** 2
 
 
 # -- resonances of the diagram -------------------------------------------------------------
@@ -308,14 +316,16 @@ class _Holds:
 # -- the mapping ---------------------------------------------------------------------------
 def map_peaks(psd, frc, excitation=None, *, min_prominence=0.3, background_hz=20.0,
               tol_bins=2.0, tolerance=None, asymmetry_below=None, f_range=None,
-              max_superharmonic=5, max_multiple=8):
+              max_superharmonic=5, max_multiple=8, dof=None, confidence=DEFAULT_CONFIDENCE):
     """Find the peaks of a response PSD ``psd = (f, P)`` and explain each by the periodic
     diagram ``frc`` (a ``continuation.FrequencyResponse``, or any object with ``branches``
     (order, frequency, xmax, stable), ``bifurcations`` (kind, frequency, xmax, order,
     branch) and ``superharmonics``). Returns a list of :class:`PeakMatch`, by frequency.
     The rule, tolerances and defaults are in the module doc; ``f_range`` (Hz, a pair lo <
     hi) limits the peaks considered; ``max_multiple``: the largest k of a multiple of a
-    stronger peak."""
+    stronger peak; ``dof``: the Welch estimate's equivalent degrees of freedom (a number or
+    one per bin, e.g. ``2 / result.psd_relative_std(ch) ** 2``; None: the PSD's measured
+    scatter alone) and ``confidence`` (z): the significance test of ``stochastic.peaks``."""
     if tolerance is not None:
         tolerance = positive("tolerance", tolerance, unit="Hz")
     if f_range is not None:
@@ -337,9 +347,13 @@ def map_peaks(psd, frc, excitation=None, *, min_prominence=0.3, background_hz=20
     if not all(hasattr(frc, a) for a in ("branches", "bifurcations")):
         raise ArgumentTypeError(f"frc: must be a continuation.FrequencyResponse (branches, "
                                 f"bifurcations), got {type(frc).__name__}")
-    idx, prom, halfw, _ = find_peaks((f, P), min_prominence=min_prominence,
-                                     background_hz=background_hz, tol_bins=tol_bins,
-                                     f_range=f_range)
+    nonnegative("confidence", confidence)
+    if dof is not None:
+        dof = (real_array("dof", dof, shape=(f.size,)) if np.ndim(dof) else
+               positive("dof", dof))
+    ps = significant_peaks(f, P, dof, min_prominence=min_prominence, confidence=confidence,
+                           background_hz=background_hz, distance_bins=tol_bins,
+                           f_range=f_range)
     df = float(np.median(np.diff(f)))
     holds = _Holds(excitation)
     res = resonances(frc, max_superharmonic=max_superharmonic)
@@ -349,10 +363,12 @@ def map_peaks(psd, frc, excitation=None, *, min_prominence=0.3, background_hz=20
                                                              if res else None)
         asymmetry_below = main.response / 3.0 if main is not None else 0.0
     peaks = []
-    for i, pr, hw in zip(idx, prom, halfw):
-        tol = tolerance if tolerance is not None else max(tol_bins * df, float(hw))
+    for i, pr, hw, fe, pe, z in zip(ps.index, ps.prominence, ps.half_width,
+                                    ps.frequency_error, ps.prominence_error, ps.significance):
+        tol = tolerance if tolerance is not None else max(tol_bins * df, float(hw), float(fe))
         peaks.append(dict(frequency=float(f[i]), prominence=float(pr), tolerance=float(tol),
-                          psd=float(P[i])))
+                          psd=float(P[i]), frequency_error=float(fe), prominence_error=float(pe),
+                          significance=float(z)))
     explained = []  # (PeakMatch) of steps 1 and 3: the parents of multiples
     out = []
     for pk in sorted(peaks, key=lambda p: -p["psd"]):  # strongest first

@@ -10,6 +10,7 @@ import os
 import numpy as np
 
 from .. import defaults
+from ..compare import welch_dof_of
 from ..scenes.schema import (build_noise, default_f_max, excitation_for_peaks,
                              history_channels, history_window)
 from .compare import plot_comparison
@@ -130,6 +131,7 @@ def scene_figure(scene_title, d, variants, out_dir, measured=None):
                 fig = plot_comparison(sto.psd(ch), per, excitation=excitation_for_peaks(s),
                                       label=ch, f_max=f_max, f_range=(0.0, f_max),
                                       stability=d.get("stability", True),
+                                      dof=welch_dof_of(sto, ch),
                                       min_prominence=d.get("min_prominence",
                                                            defaults.MIN_PROMINENCE))
                 fig.axes[0].set_title(t)

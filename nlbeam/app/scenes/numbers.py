@@ -10,8 +10,8 @@ import math
 
 import numpy as np
 
-__all__ = ["with_error", "error_bound", "bifurcation_error", "xmax_error", "GRAZING_REL",
-           "LOCATED_REL", "XMAX_REL"]
+__all__ = ["with_error", "error_bound", "error_digit", "moment_cells", "bifurcation_error",
+           "xmax_error", "GRAZING_REL", "LOCATED_REL", "XMAX_REL"]
 
 
 def with_error(value, error):
@@ -40,6 +40,29 @@ def error_bound(error):
         return f"{e:.10g}"
     k = math.floor(math.log10(e))
     return f"{math.ceil(e / 10.0 ** k - 1e-9) * 10.0 ** k:.0e}"
+
+
+def error_digit(error):
+    """A one-standard-deviation error printed as one significant digit, rounded to nearest
+    ('%.1g'): a statistical error is itself uncertain (by about 1/sqrt(2 dof)), so its
+    second digit says nothing."""
+    e = float(error)
+    if not (math.isfinite(e) and e > 0):
+        return f"{e:.10g}"
+    return f"{e:.1g}"
+
+
+def moment_cells(value, se):
+    """(value, se) cells of a statistic with a standard error: the error to one significant
+    digit (``error_digit``) and the value to that digit's decade, so the value's last digit
+    is the uncertain one (another record of the same length, or the same record under
+    other round-off, which an impacting response amplifies into another realization,
+    moves it by about +-se); (value '%.10g', None) when se is not a positive finite
+    number."""
+    if se is None or not (math.isfinite(float(se)) and float(se) > 0):
+        return f"{float(value):.10g}", None
+    e = error_digit(se)
+    return with_error(value, float(e)), e
 
 
 # a grazing point's bracket is what 8 bisections of a tracer step leave (1e-7..1e-5 of f on

@@ -17,12 +17,12 @@ import math
 import os
 
 from .. import defaults
-from ..compare import map_peaks
+from ..compare import map_peaks, welch_dof_of
 from ..files import code_fingerprint, content_key, file_sha256, write_text_atomic
 from ..plots.scene import scene_figure
 from .bifurcation_list import bifurcation_rows
 from .chart_outputs import chart_figure, chart_table, chart_variants
-from .numbers import with_error
+from .numbers import error_digit, moment_cells, with_error
 from .plan import CACHE_DIR
 from .schema import CHART_OUTPUTS, build_model, default_f_max, excitation_for_peaks
 
@@ -46,7 +46,8 @@ def _by_variant(scene, jobs, results):
 _EMPTY_COLUMNS = {
     "moments": ["variant", "channel", "mean", "std", "skewness", "kurtosis", "se_mean",
                 "se_std", "se_skewness", "se_kurtosis", "se_dof"],
-    "peaks": ["variant", "channel", "frequency_hz", "prominence_dec", "kind", "order",
+    "peaks": ["variant", "channel", "frequency_hz", "frequency_error_hz", "prominence_dec",
+              "prominence_error_dec", "significance", "kind", "order",
               "branch_frequency_hz", "stable", "distance_hz", "tolerance_hz", "xmax_m", "note",
               "explained_by_hz"],
     "bifurcations": ["variant", "branch", "order", "kind", "frequency_hz", "frequency_error_hz",
@@ -226,11 +227,10 @@ def write_table(d, variants, out_dir, measured=None, swept=None):
                                          "se_mean", "se_std", "se_skewness",
                                          "se_kurtosis") if k in mo}}
             for key in ("mean", "std", "skewness", "kurtosis"):
-                # to the digits the standard error supports (one more: it is a std. error)
-                e = row.get(f"se_{key}")
-                if key in row and e is not None and math.isfinite(e) and e > 0:
-                    row[key] = with_error(row[key], e / 10)
-                    row[f"se_{key}"] = f"{e:.2g}"
+                if key in row:
+                    row[key], se = moment_cells(row[key], row.get(f"se_{key}"))
+                    if se is not None:
+                        row[f"se_{key}"] = se
             # how rough the errors themselves are (about +-1/sqrt(2 dof) relative)
             dof = mo.get("se_dof", math.nan)
             row["se_dof"] = f"{dof:.2g}" if math.isfinite(dof) else ""
@@ -238,7 +238,7 @@ def write_table(d, variants, out_dir, measured=None, swept=None):
         elif kind == "peaks":
             f_max = d.get("f_max", default_f_max(p, s))
             for pk in map_peaks(sto.psd(ch), per, excitation_for_peaks(s),
-                                f_range=(0.0, f_max),
+                                f_range=(0.0, f_max), dof=welch_dof_of(sto, ch),
                                 min_prominence=d.get("min_prominence",
                                                      defaults.MIN_PROMINENCE)):
                 row = pk.as_row()
@@ -267,16 +267,28 @@ def write_table(d, variants, out_dir, measured=None, swept=None):
 
 
 def _peak_row(row):
-    """A peaks-table row with the diagram's numbers to the digits they support: branch
-    frequency, distance and tolerance to a hundredth of the match's tolerance (the branch
-    point matched moves with the tracer's steps), the prominence to 0.01 decade, xmax to
+    """A peaks-table row with every number to the digits it supports: the peak's frequency
+    and prominence to the decade of their (one-digit) errors from the PSD estimate, its
+    significance (standard errors) as a whole number; the
+    diagram's numbers: branch frequency, distance and tolerance to a hundredth of the
+    match's tolerance (the branch point matched moves with the tracer's steps), xmax to
     1e-3 of itself (the matched point's)."""
     out = dict(row)
+    for key, err in (("frequency_hz", "frequency_error_hz"),
+                     ("prominence_dec", "prominence_error_dec")):
+        e = row.get(err, math.nan)
+        if isinstance(e, float) and math.isfinite(e) and e > 0:
+            out[err] = error_digit(e)
+            out[key] = with_error(row[key], float(out[err]))
+        elif key == "prominence_dec":
+            out[key] = with_error(row[key], 0.01)
+    z = row.get("significance", math.nan)
+    if isinstance(z, float) and math.isfinite(z):
+        out["significance"] = f"{z:.0f}"  # standard errors: uncertain by about one
     tol = row.get("tolerance_hz", math.nan)
     if isinstance(tol, float) and math.isfinite(tol) and tol > 0:
         for key in ("branch_frequency_hz", "distance_hz", "tolerance_hz"):
             out[key] = with_error(row[key], tol / 100)
-    out["prominence_dec"] = with_error(row["prominence_dec"], 0.01)
     x = row["xmax_m"]
     if isinstance(x, float) and math.isfinite(x) and x != 0:
         out["xmax_m"] = with_error(x, 1e-3 * abs(x))
