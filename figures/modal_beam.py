@@ -39,15 +39,17 @@ def diagram(n, log=print):
 
 def bifurcation_rows(frcs):
     """Fold and period-doubling rows, each number to the digits its error supports."""
-    from nlbeam.app.scenes.numbers import bifurcation_error, with_error, xmax_error
+    from nlbeam.app.scenes.numbers import bifurcation_error, error_bound, with_error, xmax_error
 
     rows = []
     for n, frc in frcs.items():
         for b in sorted(frc.bifurcations, key=lambda b: b.frequency):
             if b.kind in ("fold", "period-doubling"):
                 e_f = max(bifurcation_error(b, frc), 1e-4)  # printed to 4 decimals at most
+                e = error_bound(e_f)  # stated, and the frequency to its digit
                 rows.append({"n_modes": n, "kind": b.kind, "order": b.order,
-                             "frequency_hz": with_error(b.frequency, e_f),
+                             "frequency_hz": with_error(b.frequency, float(e)),
+                             "frequency_error_hz": e,
                              "xmax_mm": with_error(b.xmax * 1e3, 1e3 * max(
                                  xmax_error(b, frc, e_f), 1e-7))})
     return rows
@@ -105,7 +107,8 @@ def main(argv=None):
     fig.savefig(os.path.join(HERE, "modal_beam_frc.png"), dpi=110)
     rows = bifurcation_rows(frcs)
     with open(os.path.join(HERE, "table_modal_bifurcations.csv"), "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=["n_modes", "kind", "order", "frequency_hz", "xmax_mm"])
+        w = csv.DictWriter(fh, fieldnames=["n_modes", "kind", "order", "frequency_hz",
+                                               "frequency_error_hz", "xmax_mm"])
         w.writeheader()
         w.writerows(rows)
     print(f"wrote figures/modal_beam_frc.png, figures/table_modal_bifurcations.csv ({len(rows)} "

@@ -60,6 +60,10 @@ def test_table_columns(tmp_path):
     (row,) = bifurcation_rows(frc, "v")
     assert row["frequency_hz"] == "42.12346" and row["frequency_error_hz"] == "3e-05"
     assert row["branch"] == 0 and row["order"] == 1 and "tolerance" not in row
+    # an error that rounds up to the next decade: the frequency to the printed error's digit
+    # (main printed 9.1685387 +- 1e-06: a digit the error does not support)
+    (row,) = bifurcation_rows(_frc([_bif("fold", 9.16853874, 1, 0, 1e-9, error=9.5e-7)]))
+    assert (row["frequency_hz"], row["frequency_error_hz"]) == ("9.168539", "1e-06")
     path = write_table({"kind": "bifurcations", "file": "b.csv"},
                        [("v", None, None, None, frc, None, {"periodic": 1})], str(tmp_path))
     with open(path) as fh:

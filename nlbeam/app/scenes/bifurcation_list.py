@@ -111,10 +111,14 @@ def _fold_at_doubling(rows):
 
 def bifurcation_rows(frc, variant=""):
     """Table rows (dicts) of ``list_bifurcations(frc)``: variant, branch, order, kind,
-    frequency_hz (to the digits its error supports), frequency_error_hz (the error, one digit
-    rounded up), xmax_m (likewise), note."""
-    return [{"variant": variant, "branch": r.branch, "order": r.order, "kind": r.kind,
-             "frequency_hz": with_error(r.frequency, r.frequency_error),
-             "frequency_error_hz": error_bound(r.frequency_error),
-             "xmax_m": with_error(r.xmax, r.xmax_error), "note": r.note}
-            for r in list_bifurcations(frc)]
+    frequency_error_hz (the error, one digit rounded up), frequency_hz to that digit (not
+    one further when rounding up reaches the next decade: 9.5e-7 prints as 1e-06 and the
+    frequency to 1e-6), xmax_m (to the digits its error supports), note."""
+    rows = []
+    for r in list_bifurcations(frc):
+        e = error_bound(r.frequency_error)
+        rows.append({"variant": variant, "branch": r.branch, "order": r.order, "kind": r.kind,
+                     "frequency_hz": with_error(r.frequency, float(e)),
+                     "frequency_error_hz": e,
+                     "xmax_m": with_error(r.xmax, r.xmax_error), "note": r.note})
+    return rows
