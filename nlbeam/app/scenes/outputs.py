@@ -269,8 +269,9 @@ def write_table(d, variants, out_dir, measured=None, swept=None):
 def _peak_row(row):
     """A peaks-table row with every number to the digits it supports: the peak's frequency
     and prominence to the decade of their (one-digit) errors from the PSD estimate, its
-    significance (standard errors) as a whole number, the distance to the diagram point and
-    the match's tolerance (which move with the peak) to the peak frequency's digit; the
+    significance (standard errors) as a whole number, the distance to the diagram point, the
+    match's tolerance and the parent peak of a multiple (which move with the peak) to the
+    peak frequency's digit; the
     branch frequency to a hundredth of the tolerance (the branch point matched moves with
     the tracer's steps), xmax to 1e-3 of itself (the matched point's)."""
     out = dict(row)
@@ -291,8 +292,10 @@ def _peak_row(row):
             out[key] = with_error(row[key], tol / 100)
     e = row.get("frequency_error_hz", math.nan)
     if isinstance(e, float) and math.isfinite(e) and e > 0:  # they move with the peak
-        for key in ("distance_hz", "tolerance_hz"):
-            out[key] = with_error(row[key], float(error_digit(e)))
+        for key in ("distance_hz", "tolerance_hz", "explained_by_hz"):
+            v = row.get(key, math.nan)
+            if isinstance(v, float) and math.isfinite(v):
+                out[key] = with_error(v, float(error_digit(e)))
     x = row["xmax_m"]
     if isinstance(x, float) and math.isfinite(x) and x != 0:
         out["xmax_m"] = with_error(x, 1e-3 * abs(x))
