@@ -15,7 +15,6 @@ from decimal import Decimal
 from types import SimpleNamespace
 
 import numpy as np
-import pytest
 
 import nlbeam
 import stochastic
@@ -49,7 +48,6 @@ def _tables(tmp_path, factor):
     return res, out
 
 
-@pytest.mark.slow
 def test_tables_agree_within_their_errors_under_round_off(tmp_path):
     res_a, a = _tables(tmp_path, 1.0)
     res_b, b = _tables(tmp_path, 1.0 + 1e-13)
