@@ -36,6 +36,12 @@ SMOOTH_STEPS = 10
 #: not smooth at the step's scale (the paper chart's chattering orbits near 9-10.3, 66-67,
 #: 110-111 Hz)
 SLOW_STEPS, SLOW_DS, SLOW_FAILS = 20, 0.2, 5
+#: a trace that has not accepted a single step when its first step has been halved
+#: START_HALVINGS times ends 'step underflow' there (_Tracer.trace): its start lies where the
+#: extended system is not smooth at any step's scale (the paper chart's order-2 and order-3
+#: fold and period-doubling starts at a grazing point near 67.7 and 111.7 Hz ran all 16
+#: halvings down to ds_min, about 310 evaluations each, for no point)
+START_HALVINGS = 8
 CODIM2 = ("cusp", "fold-flip", "fold-grazing", "flip-grazing", "neimark-sacker-grazing")
 
 
@@ -190,7 +196,15 @@ class _Tracer:
                 A, fresh = np.vstack([st.J, row[None, :]]), True
                 renewed = True
             elif dz is not None:
+                if st.Ju is not None:
+                    # the shooting rows' block over the states is known exactly at this
+                    # iterate (the variational equations): taken as it is; Broyden's
+                    # rank-one update corrects the rest (the frequency and parameter
+                    # columns, the test function's row) by the secant's remaining misfit
+                    A[:s.n, :s.n] = st.Ju
                 A = A + np.outer(F - F_prev - la.matmul(A, dz), dz) / la.dot(dz, dz)  # Broyden
+                if st.Ju is not None:
+                    A[:s.n, :s.n] = st.Ju
             res = float(np.max(np.abs(F)))
             if not np.isfinite(res):
                 break
@@ -390,7 +404,7 @@ class _Tracer:
                 ds *= 0.5
                 accepted = 0
                 fails += 1
-                if ds < self.ds_min:
+                if ds < self.ds_min or (not pts and ds < self.ds0 * 0.5 ** START_HALVINGS):
                     return pts, "step underflow"
                 continue
             accepted += 1
