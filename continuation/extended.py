@@ -157,14 +157,11 @@ def nearest_grazing(prob, u0, f, elements, phase=None):
 
 class CurveState:
     """What is known at one point of the extended system's solution set: z, G, J (dG/dz
-    (D - 1, D), scaled; None if not computed), Ju (the block dR/du of the shooting states,
-    scaled, where J was not computed but the evaluation had the monodromy), multipliers
-    (computed when first read: the corrector's iterates never need them), xmax (m),
-    n_impacts."""
+    (D - 1, D), scaled; None if not computed), multipliers (computed when first read: the
+    corrector's iterates never need them), xmax (m), n_impacts."""
 
     def __init__(self, z, G, J, multipliers, xmax, n_impacts):
         self.z, self.G, self.J = z, G, J
-        self.Ju = None  # dR/du (n, n), scaled, of an evaluation without J (or None)
         self._mu = multipliers  # an array, None, or a callable giving one
         self.xmax, self.n_impacts = xmax, n_impacts
 
@@ -379,12 +376,7 @@ class CurveSystem:
             extra = np.array([bordered(singular_matrix(self.kind, M), self.b, self.c)])
         G = np.r_[ev.R / w, extra]
         if not jac:
-            st = CurveState(z.copy(), G, None, mu, float(ev.xmax), int(ev.n_impacts))
-            if ev.Ju is not None:
-                # dR/du of this evaluation, exact and free (the monodromy was computed for
-                # the test function): the corrector's quasi-Newton matrix takes it
-                st.Ju = ev.Ju * w[None, :] / w[:, None]
-            return st
+            return CurveState(z.copy(), G, None, mu, float(ev.xmax), int(ev.n_impacts))
         J = np.zeros((D - 1, D))
         J[:n, :n] = ev.Ju * w[None, :] / w[:, None]
         h = 1e-6
