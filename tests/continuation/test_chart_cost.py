@@ -4,7 +4,7 @@ evaluation less; the test function's row over the shooting states from one evalu
 with central differences of the test function (one evaluation per state); a bifurcation of
 an orbit taken m times round (a branch of order m k along an orbit of order k) is recognised
 as a point of the order-k curve, by the multiplier power rule mu -> mu^m, and nothing else
-is."""
+is; a curve trace whose start never moves ends after START_HALVINGS halvings."""
 import types
 
 import numpy as np
@@ -108,3 +108,37 @@ def test_a_bifurcation_of_a_repeated_orbit_is_the_lower_orders_curve(ckind, cord
     far = types.SimpleNamespace(kind=bkind, order=border, frequency=9.9 * 1.01,
                                 state0=s * (1 + moved))
     assert _duplicate([c], far, 1e-4) is None  # another frequency: never
+
+
+class _Stuck:
+    """A curve system whose corrector never converges (a start at a non-smooth point)."""
+
+    kind, grazing, one_row_kind, row_from_one = "fold", False, False, True
+    n, D, n_evaluations = 2, 4, 0
+
+
+def test_a_start_that_never_moves_ends_after_start_halvings(monkeypatch):
+    """_Tracer.trace: a trace with no accepted step ends 'step underflow' once its first step
+    has been halved START_HALVINGS times (11 corrector calls), not at ds_min (16 calls from
+    ds = 0.05 to below 1e-6, as without the rule)."""
+    from continuation import curve as CU
+    from continuation._newton import ConvergenceError
+
+    calls = []
+
+    def never(self, *a, **k):
+        calls.append(1)
+        raise ConvergenceError("stuck")
+
+    monkeypatch.setattr(CU._Tracer, "correct", never)
+    tr = CU._Tracer(_Stuck(), (1.0, 10.0), (0.1, 1.0), (), 0.05, 1e-6, 0.3, 0.3, 100, 1e-9,
+                    12)
+    p0 = CU._Pt(types.SimpleNamespace(z=np.zeros(4), J=None), np.array([0.0, 0.0, 1.0, 0.0]))
+    pts, why = tr.trace(p0, lambda *a: None)
+    assert (pts, why) == ([], "step underflow")
+    assert len(calls) == 11  # the first step, then one per halving
+    assert CU.START_HALVINGS == 10
+    calls.clear()
+    monkeypatch.setattr(CU, "START_HALVINGS", 10 ** 9)
+    tr.trace(p0, lambda *a: None)
+    assert len(calls) == 16
