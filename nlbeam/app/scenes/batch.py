@@ -188,6 +188,6 @@ def _compute(b):
         except BaseException:
             for fut, _, _, _ in beside:
                 fut.cancel()
-            for proc in list(getattr(pool, "_processes", {}).values()):
+            for proc in list((getattr(pool, "_processes", None) or {}).values()):
                 proc.terminate()   # (an error here: not waiting for the analysis there)
             raise

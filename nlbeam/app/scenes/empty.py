@@ -15,6 +15,7 @@ went wrong (e.g. a variational kernel that does not integrate the variational eq
 from __future__ import annotations
 
 import os
+import sys
 
 __all__ = ["EmptyDiagramError", "check_not_empty", "SweepEmpties"]
 
@@ -48,10 +49,11 @@ def check_not_empty(scene, job, result, warned=()):
 
 class SweepEmpties:
     """The empty diagrams of a sweep's values, collected (``check``) instead of raised at the
-    first; ``raise_any`` raises one EmptyDiagramError naming them all."""
+    first, each reported on stderr at once (--quiet too: it is an error); ``raise_any`` raises
+    one EmptyDiagramError naming them all."""
 
-    def __init__(self, scene, log):
-        self.scene, self.log, self.errors = scene, log, []
+    def __init__(self, scene):
+        self.scene, self.errors = scene, []
 
     def check(self, job, result, warned=()):
         """True if ``result`` may be cached (not an empty diagram); an empty one is reported
@@ -63,7 +65,7 @@ class SweepEmpties:
             if self.scene.sweep is None:   # no other values to go on with
                 raise
             self.errors.append((job, exc))
-            self.log(f"nlbeam: error: {exc}")
+            print(f"nlbeam: error: {exc}", file=sys.stderr, flush=True)
             return False
 
     def raise_any(self):

@@ -261,7 +261,7 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
     parallel = scheduler is not None or (
         scene.sweep is not None and len(todo) > 1 and min(w or os.cpu_count() or 1,
                                                           len(todo)) > 1)
-    empties = SweepEmpties(scene, log)   # a sweep goes on past an empty diagram
+    empties = SweepEmpties(scene)   # a sweep goes on past an empty diagram
     if todo and scheduler is None:  # the kernels here (before a pool forks its workers)
         prepare_kernels([j.inputs for j in todo])
     if parallel:
