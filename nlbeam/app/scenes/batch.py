@@ -54,10 +54,12 @@ class _Batch:
         self.show = log if isinstance(log, Progress) else Progress(write=log)
         self.todo = {}    # path -> (job, the first scene that needs it)
         self.needs = []   # per scene: the paths of its analyses to compute
+        self.plans = []
         for sc in scenes:
             check_outputs(sc, out_dir)   # every scene's outputs writable before any work
             mine = []
-            for j in plan(sc, out_dir):
+            self.plans.append(plan(sc, out_dir))
+            for j in self.plans[-1]:
                 if not j.cached:
                     self.todo.setdefault(j.path, (j, sc))
                     mine.append(j.path)
@@ -137,9 +139,10 @@ def run_scenes(scenes, out_dir=".", *, workers=None, scheduler=None, quiet=False
         _compute(b)
     reports = []
     for k, sc in enumerate(scenes):
-        if k not in b.drawn:
+        if k not in b.drawn:   # (nothing computed: the plan made above still holds)
             reports.append(run_scene(sc, out_dir, workers=workers, quiet=quiet, log=log,
-                                     computed=computed))
+                                     computed=computed,
+                                     planned=None if computed else b.plans[k]))
     return reports
 
 

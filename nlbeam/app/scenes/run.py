@@ -216,7 +216,7 @@ def check_outputs(scene, out_dir):
 
 
 def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, scheduler=None,
-              quiet=False, log=None, computed=()):
+              quiet=False, log=None, computed=(), planned=None):
     """Validate, plan, compute what is missing (sweep points in parallel, see
     nlbeam.app.sweeps.run_jobs), cache it, and write the figures and tables atomically.
     A diagram that came out empty (every solve failed) raises EmptyDiagramError naming the
@@ -224,13 +224,14 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
     values are computed and cached (``empty.SweepEmpties``). Returns a RunReport. ``log``:
     callable(str) for progress lines (default stderr); ``computed``: cache paths of analyses
     the caller computed (and cached) in this run (``batch.run_scenes``): their warnings, given
-    then, are not repeated as those of cached results."""
+    then, are not repeated as those of cached results; ``planned``: this scene's plan as the
+    caller just made it (``plan(scene, out_dir)``; None: planned here)."""
     t0 = time.perf_counter()
     scene = path_or_scene if isinstance(path_or_scene, Scene) else load_scene(path_or_scene)
     out_dir = os.fspath(out_dir)
     if log is None:
         log = Progress(quiet=quiet)  # lines; a bar for what advances, on a terminal
-    jobs = plan(scene, out_dir)
+    jobs = plan(scene, out_dir) if planned is None else planned
     if dry_run:
         return RunReport(jobs=jobs, computed=0, wall_time=time.perf_counter() - t0)
     check_outputs(scene, out_dir)
