@@ -467,7 +467,10 @@ def bundled_scenes():
 
 
 def _figures(args):
-    from .scenes import format_plan, load_scene, plan, run_scene
+    import time
+
+    from .scenes import format_plan, load_scene, plan
+    from .scenes.batch import run_scenes
 
     _check_workers(args)
     folder, paths = bundled_scenes()
@@ -477,11 +480,13 @@ def _figures(args):
             raise ValueError(f"--only: no bundled scene named {args.only}")
     out = args.out or folder
     scenes = [load_scene(p) for p in paths]  # all validated before any work
-    for sc in scenes:
-        if args.dry_run:
+    if args.dry_run:
+        for sc in scenes:
             print(format_plan(sc, plan(sc, out), out))
-        else:
-            run_scene(sc, out, workers=args.workers, scheduler=args.scheduler, quiet=args.quiet)
+        return 0
+    t = time.perf_counter()
+    run_scenes(scenes, out, workers=args.workers, scheduler=args.scheduler, quiet=args.quiet)
+    _log(args)(f"nlbeam figures: {len(scenes)} scenes in {time.perf_counter() - t:.1f} s")
     return 0
 
 

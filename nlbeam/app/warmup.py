@@ -27,7 +27,8 @@ import tempfile
 import time
 import warnings
 
-__all__ = ["prepare_kernels", "needs_variational", "adopt_cached", "OVERLAP"]
+__all__ = ["prepare_kernels", "KernelWarmup", "warm_linalg", "needs_variational", "adopt_cached",
+           "OVERLAP"]
 
 #: compile the variational kernel in a second process beside the plain one here, where both
 #: are missing from the cache and two cores are available (False: both here, one after the
@@ -49,33 +50,112 @@ def prepare_kernels(todo):
     kernel package (a custom force has its own); a missing variational kernel in a second
     process meanwhile where that saves time (module docstring). Returns the number of
     kernels made ready."""
-    from nlbeam.integrate import compile_kernels
-
-    from .scenes.schema import build_model
-
-    needed = {}   # kernel package -> [model, its scene inputs, variational kernel needed]
-    for inputs in todo:
-        model = build_model(inputs["model"])
-        entry = needed.setdefault(model.kernels().__name__, [model, inputs["model"], False])
-        entry[2] = entry[2] or needs_variational(inputs)
-    second = {}
+    warm = KernelWarmup(todo)
     try:
-        for name, (model, spec, var) in needed.items():
-            kern = model.kernels()
-            if var and OVERLAP and not second and _cores() >= 2 \
-                    and not _cached(kern.integrate_plain) and not _cached(kern.integrate_var):
-                second[name] = _SecondProcess(spec, kern.integrate_var)   # (one at most)
-        for model, _, _ in needed.values():
-            compile_kernels(model, False)
-        for name, (model, _, var) in needed.items():
-            if var:
-                if name in second:
-                    second[name].adopt()
-                compile_kernels(model, True)   # loads what the second process compiled
+        warm.plain()
+        return warm.finish()
     finally:
-        for proc in second.values():
+        warm.stop()
+
+
+class KernelWarmup:
+    """``prepare_kernels`` in two halves, so that work needing only the plain kernels runs
+    while a second process compiles a variational one: construction starts that process
+    (where it saves time), ``plain()`` compiles or loads the plain kernels here (and the
+    dense linear algebra of the continuation where a diagram or chart follows,
+    ``warm_linalg``), ``pending()`` says whether the second process is still compiling,
+    ``finish()`` adopts its kernel and loads the variational kernels here; ``stop()`` ends
+    the second process (in a ``finally``)."""
+
+    def __init__(self, todo):
+        from .scenes.schema import build_model
+
+        self.needed = {}   # kernel package -> [model, its scene inputs, variational needed]
+        for inputs in todo:
+            model = build_model(inputs["model"])
+            entry = self.needed.setdefault(model.kernels().__name__,
+                                           [model, inputs["model"], False])
+            entry[2] = entry[2] or needs_variational(inputs)
+        self.second = {}
+        try:
+            for name, (model, spec, var) in self.needed.items():
+                kern = model.kernels()
+                if var and OVERLAP and not self.second and _cores() >= 2 \
+                        and not _cached(kern.integrate_plain) \
+                        and not _cached(kern.integrate_var):
+                    self.second[name] = _SecondProcess(spec, kern.integrate_var)   # (one)
+        except BaseException:
+            self.stop()
+            raise
+
+    @property
+    def variational(self):
+        """Whether any analysis needs a variational kernel."""
+        return any(var for _, _, var in self.needed.values())
+
+    def plain(self):
+        """Compile or load the plain kernels here (and the linear algebra of a diagram)."""
+        from nlbeam.integrate import compile_kernels
+
+        for model, _, _ in self.needed.values():
+            compile_kernels(model, False)
+        if self.variational:
+            warm_linalg()
+
+    def pending(self):
+        """Whether a second process is still compiling a variational kernel."""
+        return any(proc.proc.poll() is None for proc in self.second.values())
+
+    def finish(self):
+        """Load the variational kernels here (adopting the second process's); returns the
+        number of kernels made ready."""
+        from nlbeam.integrate import compile_kernels
+
+        for name, (model, _, var) in self.needed.items():
+            if var:
+                if name in self.second:
+                    self.second.pop(name).adopt()
+                compile_kernels(model, True)   # loads what the second process compiled
+        return len(self.needed) + sum(var for _, _, var in self.needed.values())
+
+    def stop(self):
+        """End a second process still running (and remove its folder)."""
+        for proc in self.second.values():
             proc.stop()
-    return len(needed) + sum(var for _, _, var in needed.values())
+        self.second = {}
+
+
+def warm_linalg():
+    """Compile (or load from numba's disk cache) here every routine of ``nlbeam._linalg`` for
+    the argument types the continuation passes (float arrays, complex eigenvalues), before a
+    pool forks its workers: otherwise the first diagram compiles them on its way (about 20 s
+    CPU on a fresh machine), in every worker that meets them first. Returns the CPU
+    seconds it took."""
+    import numpy as np
+
+    from nlbeam import _linalg as la
+
+    t = time.process_time()
+    A = np.array([[2.0, -1.0, 0.5], [1.0, 2.0, 0.0], [0.0, 0.25, 1.0]])   # a complex pair
+    b = np.array([1.0, 2.0, 3.0])
+    la.solve(A, b)
+    la.solve(A, A)
+    la.det_sign(A)
+    la.det(A)
+    la.inv(A)
+    la.matmul(A, A)
+    la.matmul(A, b)
+    la.matmul(b, A)
+    la.matmul(b, b)
+    la.dot(b, b)
+    la.norm(b)
+    la.norm(A)
+    la.eig(A)
+    la.qr(A)
+    la.qr(A[:, :2])
+    la.null_vector(A[:2, :])
+    la.smallest_singular_vectors(A)
+    return time.process_time() - t
 
 
 def adopt_cached(dispatcher, folder):

@@ -81,3 +81,38 @@ def test_nlbeam_figures_exits_non_zero_naming_the_bundled_scene(tmp_path, capsys
     err = capsys.readouterr().err.strip().splitlines()
     assert "error: scene paper_broadband.toml (" in err[-1] and "empty" in err[-1]
     assert _cache_files(out) == []
+
+
+SWEPT = SCENE + """
+[sweep]
+parameter = "amplitude"
+values = [2e-4, 1e-4]
+"""
+
+
+def test_a_sweep_goes_on_past_an_empty_diagram_and_exits_non_zero(tmp_path, capsys,
+                                                                   monkeypatch):
+    # a user's sweep: the diagram at the first value comes out empty, the second is traced
+    # and cached; the empty one is reported at once and named again at the end (exit 2),
+    # nothing is drawn; a re-run computes only the value that came out empty
+    real = continuation.frequency_response
+
+    def empty_at_2e4(model, amplitude, f_range, orders=(1,), **kw):
+        if amplitude == 2e-4:
+            return continuation.FrequencyResponse(model_parameters=model.parameters(),
+                                                  amplitude=amplitude, parameter="frequency",
+                                                  p_range=tuple(f_range))
+        return real(model, amplitude, f_range, orders=orders, **kw)
+
+    monkeypatch.setattr(continuation, "frequency_response", empty_at_2e4)
+    scene = write_scene(tmp_path, SWEPT, "swept.toml")
+    out = tmp_path / "o"
+    assert main(["run", str(scene), "--out", str(out), "--quiet", "--workers", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert sum("came out empty" in line for line in err) == 2   # at once, and at the end
+    assert "error: scene swept.toml (an empty diagram): 1 diagram(s) of the sweep" in err[-1]
+    assert "amplitude=0.0002" in err[-1] or "2e-04" in err[-1] or "0.0002" in err[-1], err[-1]
+    assert len(_cache_files(out)) == 1 and not (out / "frc.png").exists()
+    monkeypatch.setattr(continuation, "frequency_response", real)
+    rep = run_scene(scene, out, quiet=True, workers=1)
+    assert rep.computed == 1 and rep.reused == 1 and (out / "frc.png").exists()

@@ -10,7 +10,6 @@ import sys
 import textwrap
 
 import numpy as np
-import pytest
 from scipy.linalg import expm
 
 import nlbeam
@@ -186,41 +185,112 @@ def test_a_kernel_compiled_with_another_numba_cache_folder_is_adopted_and_loaded
     assert edited == [0, 9.0, 1]
 
 
-@pytest.mark.slow
-def test_a_variational_kernel_from_a_second_process_integrates_the_monodromy(tmp_path):
+_TOY_LOOPS = '''
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def field(x, wn, zeta):
+    return np.array([x[1], -wn * wn * x[0] - 2.0 * zeta * wn * x[1]])
+
+
+@njit(cache=True)
+def rk4(x, h, wn, zeta):
+    k1 = field(x, wn, zeta)
+    k2 = field(x + 0.5 * h * k1, wn, zeta)
+    k3 = field(x + 0.5 * h * k2, wn, zeta)
+    k4 = field(x + h * k3, wn, zeta)
+    return x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+def _loop_for(want_var):
+    # as nlbeam._kernels.loop._loop_for: one factory, two loops of one signature sharing the
+    # step functions; the monodromy M integrated only by the variational one
+    def _loop(x0, wn, zeta, T, n, M):
+        h = T / n
+        x = x0.copy()
+        for _ in range(n):
+            if want_var:
+                for j in range(2):   # the variational equations of a linear field: its
+                    M[:, j] = rk4(M[:, j], h, wn, zeta)   # flow on each column of M
+            x = rk4(x, h, wn, zeta)
+        return x
+    _loop.__name__ += "_var" if want_var else "_plain"
+    _loop.__qualname__ = _loop.__name__
+    return njit(cache=True)(_loop)
+
+
+loop_plain = _loop_for(False)
+loop_var = _loop_for(True)
+'''
+
+_TOY_RUN = """
+import json
+import numpy as np
+from toy_loops import loop_plain, loop_var
+x = {which}(np.array([1e-3, 0.0]), {wn}, {zeta}, {T}, 2000, np.eye(2))
+d = {which}
+print(json.dumps([d._cache._cache_path, x.tolist(), None, sum(d.stats.cache_misses.values())]))
+"""
+
+
+def test_a_variational_loop_compiled_in_a_second_process_integrates_the_monodromy(tmp_path):
     # session 11's empty diagrams: the variational kernel compiled in a second process and
     # loaded here beside the plain one compiled here ran the plain loop (both loops were one
     # closure, whose compiled name came out the same in both processes), so the monodromy
-    # stayed unintegrated. Both kernels compiled from an empty numba cache as a scene run
-    # does it (second process forced); the monodromy of a linear oscillator over 0.1 s (a stop
-    # far out of reach) against its matrix exponential.
+    # stayed unintegrated. The mechanism on a toy of the same shape (one factory, two loops of
+    # one signature, shared step functions; seconds to compile, not the 92 s of nlbeam's
+    # kernels): the variational loop compiled in another process with its own numba cache,
+    # adopted here (adopt_cached, as prepare_kernels does) and loaded beside the plain one
+    # compiled here; the monodromy of a linear oscillator over 0.1 s against its matrix exponential.
+    # (The names test_no_two_compiled_functions_share_a_qualified_name checks for nlbeam's
+    # own kernels are what makes this work; the real variational kernel's monodromy:
+    # test_the_suites_variational_kernel_integrates_the_monodromy.)
     wn, zeta, T = 2 * np.pi * 20.0, 0.02, 0.1
-    got = subprocess.run([sys.executable, "-c", textwrap.dedent(f"""
+    (tmp_path / "toy_loops.py").write_text(_TOY_LOOPS)
+    var = _tiny_run(tmp_path, tmp_path / "theirs",
+                    _TOY_RUN.format(which="loop_var", wn=wn, zeta=zeta, T=T))
+    assert var[3] == 1   # compiled there
+    here = _tiny_run(tmp_path, tmp_path / "mine", f"""
         import json
         import numpy as np
-        import nlbeam
-        from nlbeam.app import warmup
-        warmup._cores = lambda: 2
-        n = warmup.prepare_kernels([{{"analysis": "periodic", "model": {{"name": "BeamImpact"}},
-                                     "periodic": {{"stability": True}}}}])
-        k = nlbeam.BeamImpact.paper().kernels()
-        st = k.integrate_var.stats
-        m = nlbeam.System([[1.0]], [[2 * {zeta} * {wn}]], [[{wn} ** 2]], elements=(
-            nlbeam.PiecewiseLinearStop(0, k=1e6, gap=1.0),))
-        f = nlbeam.flow(m, nlbeam.Harmonic(1e-4, 25.0), [1e-3, 0.0], 0.0, {T}, monodromy=True)
-        print(json.dumps([n, sum(st.cache_hits.values()), sum(st.cache_misses.values()),
-                          np.asarray(f.monodromy).tolist()]))
-    """)], capture_output=True, text=True,
-        env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache")))
-    assert got.returncode == 0, got.stderr[-3000:]
-    n, hits, misses, mono = json.loads(got.stdout.splitlines()[-1])
-    assert n == 2 and hits == 1 and misses == 0   # adopted from the second process, loaded
+        from nlbeam.app.warmup import adopt_cached
+        from toy_loops import loop_plain, loop_var
+        n = adopt_cached(loop_var, {var[0]!r})
+        x0 = np.array([1e-3, 0.0])
+        Mp, Mv = np.eye(2), np.eye(2)
+        xp = loop_plain(x0, {wn}, {zeta}, {T}, 2000, Mp)
+        xv = loop_var(x0, {wn}, {zeta}, {T}, 2000, Mv)
+        st = [sum(d.stats.cache_hits.values()) for d in (loop_plain, loop_var)]
+        miss = [sum(d.stats.cache_misses.values()) for d in (loop_plain, loop_var)]
+        print(json.dumps([n, st, miss, xp.tolist(), xv.tolist(), Mp.tolist(), Mv.tolist()]))
+    """)
+    n, hits, misses, xp, xv, Mp, Mv = here
+    assert n == 1 and hits == [0, 1] and misses == [1, 0]   # plain compiled here, var loaded
     A = np.array([[0.0, 1.0], [-wn * wn, -2 * zeta * wn]])
+    E = expm(A * T)
     scale = np.diag([1.0, wn])   # (m, m/s) -> comparable units
-    err = np.linalg.inv(scale) @ (np.array(mono) - expm(A * T)) @ scale
-    # RK4 at the default step: 5.2e-7 from expm; a monodromy never integrated (the identity)
-    # is 0.22 off
-    assert np.abs(err).max() < 1e-5, (mono, expm(A * T))
+    err = np.linalg.inv(scale) @ (np.array(Mv) - E) @ scale
+    # RK4, 2000 steps: ~1e-9 from expm; a monodromy never integrated (the identity): 0.2 off
+    assert np.abs(err).max() < 1e-6, (Mv, E)
+    assert Mp == np.eye(2).tolist()   # the plain loop leaves M alone ...
+    assert xp == xv == var[1]         # ... and both integrate the state as the other process
+    assert np.abs(np.array(xv) - E @ [1e-3, 0.0]).max() < 1e-9
+
+
+def test_the_suites_variational_kernel_integrates_the_monodromy():
+    # the kernel the suite uses (compiled or loaded once per machine): the monodromy of a
+    # linear oscillator over 0.1 s (a stop far out of reach) against its matrix exponential
+    wn, zeta, T = 2 * np.pi * 20.0, 0.02, 0.1
+    m = nlbeam.System([[1.0]], [[2 * zeta * wn]], [[wn ** 2]], elements=(
+        nlbeam.PiecewiseLinearStop(0, k=1e6, gap=1.0),))
+    f = nlbeam.flow(m, nlbeam.Harmonic(1e-4, 25.0), [1e-3, 0.0], 0.0, T, monodromy=True)
+    A = np.array([[0.0, 1.0], [-wn * wn, -2 * zeta * wn]])
+    scale = np.diag([1.0, wn])
+    err = np.linalg.inv(scale) @ (np.asarray(f.monodromy) - expm(A * T)) @ scale
+    # RK4 at the default step: 5.2e-7 from expm; a monodromy never integrated: 0.22 off
+    assert np.abs(err).max() < 1e-5, (f.monodromy, expm(A * T))
 
 
 def _compiled_functions():

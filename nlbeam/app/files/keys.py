@@ -88,7 +88,8 @@ def code_fingerprint(packages=("nlbeam", "continuation", "stochastic"), exclude=
 # tables, the comparison of peaks, the command line, the scene outputs, the kernels' warm-up
 _READERS = ("nlbeam/app/plots", "nlbeam/app/cli.py", "nlbeam/app/demo.py",
             "nlbeam/app/compare.py", "nlbeam/app/scenes/outputs.py",
-            "nlbeam/app/scenes/numbers.py", "nlbeam/app/warmup.py")
+            "nlbeam/app/scenes/numbers.py", "nlbeam/app/warmup.py",
+            "nlbeam/app/scenes/batch.py", "nlbeam/app/scenes/empty.py")   # (order, checks)
 
 #: the source each analysis of a scene depends on: (packages, paths left out): an edit of
 #: the stochastic package keeps the cached diagrams, one of the plots keeps every result

@@ -18,7 +18,7 @@ from ..files import remove_stale_temporaries, write_text_atomic
 from ..progress import Progress
 from ..sweeps import run_jobs
 from ..warmup import prepare_kernels
-from .empty import check_not_empty
+from .empty import SweepEmpties
 from .outputs import write_outputs
 from .plan import CACHE_DIR, entry_record, plan
 from .schema import Scene, build_model, build_noise, load_scene
@@ -216,18 +216,22 @@ def check_outputs(scene, out_dir):
 
 
 def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, scheduler=None,
-              quiet=False, log=None):
+              quiet=False, log=None, computed=(), planned=None):
     """Validate, plan, compute what is missing (sweep points in parallel, see
     nlbeam.app.sweeps.run_jobs), cache it, and write the figures and tables atomically.
     A diagram that came out empty (every solve failed) raises EmptyDiagramError naming the
-    scene, uncached and undrawn (``empty.check_not_empty``). Returns a RunReport. ``log``:
-    callable(str) for progress lines (default stderr)."""
+    scene, uncached and undrawn (``empty.check_not_empty``); in a sweep, after the other
+    values are computed and cached (``empty.SweepEmpties``). Returns a RunReport. ``log``:
+    callable(str) for progress lines (default stderr); ``computed``: cache paths of analyses
+    the caller computed (and cached) in this run (``batch.run_scenes``): their warnings, given
+    then, are not repeated as those of cached results; ``planned``: this scene's plan as the
+    caller just made it (``plan(scene, out_dir)``; None: planned here)."""
     t0 = time.perf_counter()
     scene = path_or_scene if isinstance(path_or_scene, Scene) else load_scene(path_or_scene)
     out_dir = os.fspath(out_dir)
     if log is None:
         log = Progress(quiet=quiet)  # lines; a bar for what advances, on a terminal
-    jobs = plan(scene, out_dir)
+    jobs = plan(scene, out_dir) if planned is None else planned
     if dry_run:
         return RunReport(jobs=jobs, computed=0, wall_time=time.perf_counter() - t0)
     check_outputs(scene, out_dir)
@@ -244,7 +248,7 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
     def name_of(j):  # an analysis several variants share names no variant
         return j.kind + (f" {j.variant}" if j.variant and sharing[j.path] == 1 else "")
 
-    for j in {j.path: j for j in jobs if j.cached}.values():  # as when first computed
+    for j in {j.path: j for j in jobs if j.cached and j.path not in computed}.values():
         name = name_of(j)
         for text in cached_warnings(j):
             warnings.warn(f"(cached {name}, as first computed) {text}", CachedResultWarning,
@@ -258,14 +262,15 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
     parallel = scheduler is not None or (
         scene.sweep is not None and len(todo) > 1 and min(w or os.cpu_count() or 1,
                                                           len(todo)) > 1)
+    empties = SweepEmpties(scene)   # a sweep goes on past an empty diagram
     if todo and scheduler is None:  # the kernels here (before a pool forks its workers)
         prepare_kernels([j.inputs for j in todo])
     if parallel:
         outs = _run_parallel(todo, w, scheduler, show, quiet, name_of)
         for j, (r, warned) in zip(todo, outs):
-            check_not_empty(scene, j, r, warned)
-            store_result(j, r, log, warned)
-            results[j.path] = r
+            if empties.check(j, r, warned):
+                store_result(j, r, log, warned)
+                results[j.path] = r
     else:
         for n, j in enumerate(todo, start=1):
             log(f"nlbeam: [{n}/{len(todo)}] {name_of(j)}: {j.description}")
@@ -280,10 +285,11 @@ def run_scene(path_or_scene, out_dir=".", *, dry_run=False, workers=None, schedu
             t = time.perf_counter()
             r, warned = compute_recorded(inputs)
             show.close()
-            check_not_empty(scene, j, r, warned)
-            store_result(j, r, log, warned)
-            results[j.path] = r
+            if empties.check(j, r, warned):
+                store_result(j, r, log, warned)
+                results[j.path] = r
             log(f"nlbeam:   done in {time.perf_counter() - t:.1f} s")
+    empties.raise_any()
     files = write_outputs(scene, jobs, results, out_dir, log, load_result)
     return RunReport(jobs=jobs, computed=len(todo), files=files,
                      wall_time=time.perf_counter() - t0)
