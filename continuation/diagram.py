@@ -127,8 +127,9 @@ class Bifurcation(Summary):
 
     @property
     def smooth(self):
-        """False for a bifurcation at a grazing point (a multiplier jumps there)."""
-        return not self.note.startswith("at grazing")
+        """False for a bifurcation at a grazing point (a multiplier jumps there) or at a kink
+        (the branch turns back where the map is not smooth: continuation.kinks.turn)."""
+        return not self.note.startswith(("at grazing", "at a kink"))
 
     def _summary_rows(self):
         rows = [("kind", self.kind), ("order", str(self.order)), ("branch", str(self.branch)),

@@ -11,7 +11,11 @@ instead of dividing it (``signal``). The tracer then crosses from the far side
 (``crossing``): a fixed-parameter solve beyond the kink, joined to the near side through it
 (``meet``: the near side's tangent line and the far side's, followed back, meet at one point
 where R vanishes to first order), instead of halving the step into the kink until the step
-underflows.
+underflows. Where no solution lies beyond the kink, the branch may turn back there with the same
+number of impacts (a non-smooth fold, as at a corner): ``turn`` looks for the far strand behind
+the kink in the parameter, from states beyond the kink, and accepts it where it is joined to
+the near side through the kink and the sign of prod(mu - 1) changes (the tracer reports a fold
+there).
 """
 from __future__ import annotations
 
@@ -19,7 +23,7 @@ import numpy as np
 
 from nlbeam import _linalg as la
 from ._newton import ConvergenceError
-from .corners import tangent
+from .corners import fold_sign, tangent
 
 GROWTH = 10.0  # the first Newton step multiplies the predictor's residual by more than this
 ORDER = 1.5  # the predictor's residual falls with the step at a lower order than this
@@ -99,7 +103,12 @@ def meet(tr, prob, z_a, t_a, z_b, t_b, rel=0.05):
             return None
         tr.n_evaluations += 1
         out.append(float(np.max(np.abs(ev.R / w))))
-    if not (np.isfinite(out[0]) and out[0] <= rel * out[1]):
+    if tr.debug:
+        print("  kink: |R| %.3g at the meeting point, %.3g at the chord's midpoint" % tuple(out))
+    # (R at the meeting point within the map's noise, where R at the midpoint lies above it,
+    # counts as vanishing: the 4-mode beam at 6.35952 Hz, 2.5e-8 against 1.6e-7)
+    if not (np.isfinite(out[0]) and (out[0] <= rel * out[1]
+                                     or out[0] <= 0.5 * tr.noise_tol < tr.noise_tol < out[1])):
         return None
     return k
 
@@ -146,6 +155,62 @@ def crossing(tr, prob, a, z_a, t_in, dps):
                 print("  kink: lines %s, meet %s" % (_closest(z_a, t_a, zs, t_b), k is not None))
             # (None where the tangents are parallel:
             # b lies before the kink, on a's smooth stretch; a larger distance is tried)
+            if k is not None:
+                b.tangent = t_b
+                return zs, evs, b, t_b, k
+    return None
+
+
+def turn(tr, prob, a, z_a, t_in, dps, d_fail):
+    """A branch point on a strand that turns back at a kink ahead of the branch point a (z_a
+    scaled, direction of travel t_in, unit): fixed-parameter solves at the scaled parameter
+    distances ``dps`` behind a (nearest first), started from states beyond the kink (a's state
+    moved d_fail and 2 d_fail along t_in, d_fail: the longest failed step, whose predictor lay
+    beyond it), so that the first Newton step uses the far side's Jacobian. A solution must keep
+    a's number of impacts, lie within ``tr.jump_max_distance`` of a, be joined to a through the
+    kink (``meet``; a solution on a's own strand, tangent parallel to a's, is passed over) and
+    have the other sign of prod(mu - 1) (``corners.fold_sign``: unless either sign is
+    uncertain, as a corner's turn must). Returns (z, evaluation, Point, tangent away from the
+    kink, kink point) or None."""
+    e_p = np.zeros(len(z_a))
+    e_p[-1] = 1.0
+    sp = 1.0 if t_in[-1] >= 0 else -1.0
+    t_a = tangent(a.jac, t_in) if a.jac is not None else t_in
+    s_a, ok_a = fold_sign(a, tr.fold_margin)
+    starts = [z_a[:-1] + k * d_fail * t_in[:-1] for k in (1.0, 2.0)]
+    for dp in dps:
+        for g in starts:
+            try:
+                zs, evs, _ = tr.correct(prob, np.r_[g, z_a[-1] - sp * dp], e_p, a.corr,
+                                        fixed_p=True)
+            except ConvergenceError:
+                if tr.debug:
+                    print("  kink turn: no solution at p %.9g" % ((z_a[-1] - sp * dp)
+                                                                   * prob.scale_p))
+                continue
+            dist = np.max(np.abs(zs[:-1] - z_a[:-1]))
+            if tr.debug:
+                print("  kink turn: p %.9g impacts %d (a: %d), distance %.3g" % (
+                    zs[-1] * prob.scale_p, evs.n_impacts, a.n_impacts, dist))
+            if evs.n_impacts != a.n_impacts or dist > tr.jump_max_distance:
+                continue
+            tr.complete_jacobian(prob, evs)
+            b = tr._point(prob, zs, evs)
+            try:
+                t_b = tangent(b.jac, zs - z_a)
+            except np.linalg.LinAlgError:
+                continue
+            if t_b[-1] * sp > 0:
+                continue  # not back in the parameter: no turn (crossing's case)
+            s_b, ok_b = fold_sign(b, tr.fold_margin)
+            if ok_a and ok_b and s_a == s_b:
+                if tr.debug:
+                    print("  kink turn: the sign of prod(mu - 1) does not change")
+                continue
+            k = meet(tr, prob, z_a, t_a, zs, t_b)
+            if tr.debug:
+                print("  kink turn: lines %s, meet %s" % (_closest(z_a, t_a, zs, t_b),
+                                                         k is not None))
             if k is not None:
                 b.tangent = t_b
                 return zs, evs, b, t_b, k

@@ -159,7 +159,10 @@ class Tracer:
     only linearly with the step and the first Newton step multiplies it), after ``jump_after``
     failures the kink is crossed from the far side once per point (``kinks.crossing``) at
     the parameter distances ``kink_steps`` times the longest failed step's (scaled) and the
-    relative ``jump_steps``, nearest first; () turns this off.
+    relative ``jump_steps``, nearest first; where no solution lies beyond it, the same
+    distances behind the point are tried for a strand that turns back at the kink
+    (``kinks.turn``: started beyond the kink, joined through it, the sign of prod(mu - 1)
+    changed), reported as a fold with the note 'at a kink'; () turns both off.
 
     The corrector is a quasi-Newton iteration on the bordered system: the Jacobian at the
     predictor is dR/du from the variational equations (or, for a problem without them, the
@@ -591,7 +594,7 @@ class Tracer:
         n_approach = 0
         pending_end = None  # a located jump of the map where the branch ends (far side first)
         while len(pts) < self.max_points:
-            jumped = False
+            jumped = kink_turn = False
             crossing = None
             ok = False
             iters = self.max_iter
@@ -715,12 +718,17 @@ class Tracer:
                     dps = sorted({k * d_fail for k in self.kink_steps if k * d_fail > 0}
                                  | {s * unit for s in self.jump_steps})
                     res = kinks.crossing(self, prob, pts[-1], z, t_in, dps)
+                    if res is None:  # no solution beyond: does the branch turn back there?
+                        res = kinks.turn(self, prob, pts[-1], z, t_in, dps,
+                                         max(d for d, _, _ in trials))
+                        kink_turn = res is not None
                     if self.debug:
                         print("kink ahead of p %.9g (%s): %s" % (
-                            z[-1] * wp, kink, "crossed to p %.9g" % (res[0][-1] * wp)
+                            z[-1] * wp, kink, "crossed to p %.9g%s" % (
+                                res[0][-1] * wp, " (turned back)" if kink_turn else "")
                             if res is not None else "not crossed"))
                     if res is not None:
-                        zn, evn, ptn, tn, _ = res
+                        zn, evn, ptn, tn, kink_at = res
                         jumped = True
                         ds = ds_ok
                 last = self.unverified
@@ -860,6 +868,11 @@ class Tracer:
                     if not any(L.kind == "fold" for L in found):
                         found.append(Located("fold", ext, g_tol, len(pts) - 1,
                                              note=_jump_note("fold", prev, pt)))
+                if kink_turn:  # the branch turned back at a kink (kinks.turn): a fold there,
+                    # between the near point and the kink (the far point lies behind both)
+                    found.append(Located(
+                        "fold", prev, abs(kink_at[-1] * wp - pt.p), len(pts) - 1,
+                        note="at a kink: the branch turns back (non-smooth)"))
                 located += found
             if stopped:  # ran onto a traced branch: the step's bifurcations are listed too
                 pts.append(pt)
