@@ -19,7 +19,7 @@ from . import _arguments as _args
 from nlbeam import _linalg as la
 from ._newton import ContinuationWarning, ConvergenceError
 from .parallel import Speculator, take, taken
-from .pathfollow import Tracer
+from .pathfollow import GRAZING_RESOLUTION, Tracer
 from .seeding import brute_force
 from .shooting import (Integrator, PeriodicSolution, ShootingProblem, _problem_from_state,
                        forcing, steady_state)
@@ -586,10 +586,10 @@ def _same_point(a, b, rel=1e-6):
             and abs(a.xmax - b.xmax) <= 1e-4 * max(abs(a.xmax), 1e-300))
 
 
-# the resolution of a grazing point in the parameter, relative (nlbeam.app.scenes.numbers
-# prints grazing frequencies to it, GRAZING_REL): two changes of the number of impacts on one
-# branch closer than this are one event of the diagram
-GRAZING_RESOLUTION = 1e-5
+# GRAZING_RESOLUTION (continuation.pathfollow): the resolution of a grazing point in the
+# parameter, relative (nlbeam.app.scenes.numbers prints grazing frequencies to it,
+# GRAZING_REL): two changes of the number of impacts on one branch closer than this are one
+# event of the diagram
 
 
 def _merged_grazing(bf, bifs):
@@ -771,7 +771,11 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                 continue  # where a branch ran onto another one, its end point is already listed
             bifs.append(bf)
             if L.kind == "period-doubling":
-                pd_points.append((L.point, order, bi if bf.smooth else None))
+                # (one within a grazing point's resolution is reported there: switched from
+                # its root on the smooth side, Located.root; one at a jump is not switched)
+                root = getattr(L, "root", None)
+                pd_points.append((L.point if root is None else root, order,
+                                  bi if bf.smooth or root is not None else None))
         if early is not None:  # (once all are added: a grazing point may absorb the next)
             for bf in bifs[n_bifs:]:
                 early.bifurcation(amplitude, bf)
