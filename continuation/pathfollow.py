@@ -118,6 +118,7 @@ class Located:
     note: str = ""  # e.g. 'at grazing: ...' where a multiplier jumps across the unit circle
     root: Point | None = None  # where one reported at a grazing point was located on a smooth
     # side next to it (at_grazing_points): the point on the smooth branch (branch switching)
+    placed: bool = True  # False: not located (reported at the end of its bracket)
 
 
 def test_functions(mu):
@@ -982,10 +983,14 @@ class Tracer:
         naming the jump. So a stability change at (or within round-off of) a grazing point is
         listed once, wherever round-off puts it relative to the grazing point. A sign change
         on a smooth side that the locate cannot place there is reported at the grazing point
-        too (the root lies between it and the side's end), with the side as its bracket: not
-        at the side's end, a point of the branch the event is not at (the paper model's
-        order-2 branch at 9.66425 Hz: the far side's locate failed in one run only, and its
-        fold, reported at the step's end, was later located at another fold 3.4e-4 Hz away).
+        too (the root lies between it and the side's end), with the side as its bracket, where
+        the test function's chord puts the root within GRAZING_RESOLUTION of the grazing
+        point: not at the side's end, a point of the branch the event is not at (the paper
+        model's order-2 branch at 9.66425 Hz: the far side's locate failed in one run only,
+        and its fold, reported at the step's end, was later located at another fold 3.4e-4
+        Hz away). Farther, it stays at the side's end (the paper model's order-1 period
+        doubling at 6.647 Hz, 2.3e-3 Hz before the grazing point where the multiplier jumps
+        back across -1: two events).
         ``at_grazing_points`` (at the end of ``trace``) then makes the events within a
         grazing point's resolution one event there."""
         out = []
@@ -1035,11 +1040,18 @@ class Tracer:
                     # (after a jump; or the step's own predictors failed next to the grazing
                     # point, where the branch bends fastest: the chord's)
                     loc = self.locate_chord(prob, a, b, k, ta[k], tb[k])
-                if loc is None:  # not placed on the side: at the grazing point, the side
-                    # (between it and the side's end) its bracket
-                    out.append(Located(kind, g_far, max(g_tol, abs(a.p - g_far.p),
-                                                        abs(b.p - g_far.p)), index,
-                                       note=_side_note(kind, a, b)))
+                if loc is None:
+                    # not placed on the side: where the test function's chord puts its root
+                    # within GRAZING_RESOLUTION of the grazing point, it is reported there,
+                    # the side (between it and the side's end) its bracket; else at the
+                    # side's end, the side its bracket (and left so: ``placed`` False)
+                    p_est = a.p + ta[k] / (ta[k] - tb[k]) * (b.p - a.p)
+                    if abs(p_est - g_far.p) <= GRAZING_RESOLUTION * abs(g_far.p):
+                        out.append(Located(kind, g_far, max(g_tol, abs(a.p - g_far.p),
+                                                            abs(b.p - g_far.p)), index,
+                                           note=_side_note(kind, a, b)))
+                    else:
+                        out.append(Located(kind, b, abs(b.p - a.p), index, placed=False))
                     continue
                 out.append(Located(kind, loc[0], loc[1], index))
         return out
@@ -1276,7 +1288,7 @@ def at_grazing_points(located, pts, res=GRAZING_RESOLUTION):
     graz = [G for G in located if G.kind == "grazing"]
     out = []
     for L in located:
-        G = (None if L.kind == "grazing" or L.note else
+        G = (None if L.kind == "grazing" or L.note or not L.placed else
              next((G for G in graz if _within_resolution(L, G, pts, res)), None))
         if G is None:
             out.append(L)
@@ -1288,7 +1300,8 @@ def at_grazing_points(located, pts, res=GRAZING_RESOLUTION):
                            root=L.point))
     merged = []
     for L in out:
-        o = next((o for o in merged if L.note and o.note and o.kind == L.kind
+        o = next((o for o in merged if L.note.startswith("at grazing")
+                  and o.note.startswith("at grazing") and o.kind == L.kind
                   and o.point is L.point), None)
         if o is None:
             merged.append(L)
