@@ -176,3 +176,48 @@ def test_at_grazing_points_keeps_other_events_and_the_window():
     p2 = out[4]  # the jump and the period doubling within the resolution: one event
     assert p2.tolerance == pytest.approx(3e-5) and "2 such events" in p2.note
     assert p2.note.startswith("at grazing") and not p2.smooth if hasattr(p2, "smooth") else True
+
+
+def test_a_side_not_placed_far_from_the_grazing_point_stays_a_smooth_event():
+    """The paper model's order-1 step at 6.649 Hz: the multiplier passes -1 on the near side
+    (0.045 -> -4.225; the locates fail there, the root 2.3e-3 Hz before the grazing point)
+    and jumps back across it (-4.225 -> -0.0017): two period doublings. The test function's
+    chord puts the unplaced root 24 % into the side, beyond the grazing resolution: it stays at
+    the side's end with the side as its bracket, apart from the jump (the first version of
+    at_grazing_points merged the two: 136 -> 134 bifurcations on the reference diagram)."""
+    prev, g_near, g_far, pt = (_pt(p, [mu, 0.01], n) for p, mu, n in (
+        (6.6551, 0.045, 5), (6.64937, -4.225, 5), (6.64936, -0.0017, 6), (6.6490, -0.002, 6)))
+    tr = Tracer()
+    tr.locate_chord = lambda prob, a, b, k, ga, gb: None
+    out = tr._detect_step(None, None, None, 0.1, prev, pt, PF.test_functions(prev.multipliers),
+                          PF.test_functions(pt.multipliers), True,
+                          (g_far, 1e-6, g_near, None), 3)
+    out = at_grazing_points([Located("grazing", g_far, 1e-6, 3)] + out, [None] * 5)
+    pds = [L for L in out if L.kind == "period-doubling"]
+    assert len(pds) == 2
+    side, jump = sorted(pds, key=lambda L: bool(L.note))
+    assert side.note == "" and side.point is g_near and not side.placed
+    assert side.tolerance == pytest.approx(6.6551 - 6.64937)
+    assert jump.point is g_far and jump.note.startswith("at grazing: multiplier jumps")
+
+
+def test_an_event_at_a_grazing_point_is_paired_with_that_grazing_point():
+    """diagram._grazing_partners: a bifurcation reported at a grazing point takes that grazing
+    point's estimate (value, error) after the error estimates (the paper model's order-2 fold
+    at 9.33417 Hz, reported at the bracket's other end of a turning corner: located again on
+    its own it kept its bracket, 9.334172 +- 1.9e-5, in the reference, and landed on its
+    grazing point 9.333900 +- 1.4e-4 under A x (1 + 1e-13)). Smooth events, other branches,
+    grazing points beyond the brackets: not paired; the nearest grazing point wins."""
+    from continuation.diagram import Bifurcation, _grazing_partners
+
+    def b(kind, f, tol, branch=6, note=""):
+        return Bifurcation(kind, f, f, 1e-4, 2, branch, tol, None, note=note)
+    jump = "at grazing: multiplier jumps from 0.9559 to 1.012 (non-smooth)"
+    g1, g2 = b("grazing", 9.3339, 1.3e-6), b("grazing", 9.33418, 1e-6)
+    fold = b("fold", 9.334172, 1.9e-5, note=jump)
+    smooth = b("fold", 9.334172, 1.9e-5)
+    other = b("fold", 9.334172, 1.9e-5, branch=5, note=jump)
+    far = b("period-doubling", 9.3345, 1e-6, note=jump)
+    pairs = _grazing_partners([g1, fold, smooth, other, far, g2])
+    assert len(pairs) == 1 and pairs[0][0] is fold and pairs[0][1] is g2
+    assert _grazing_partners([g1, fold]) == []  # 2.7e-4 apart, brackets 2e-5
