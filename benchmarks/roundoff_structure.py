@@ -5,8 +5,8 @@ m, k, b, K_hertz x (1 + 1e-13), x (1 - 1e-13), A x (1 + 1e-13) and dt_scale 1 - 
 steps a period: a 1 % step change, more than round-off). For each perturbation prints the
 lines of the round-off test's ``structure_differences`` and the unmatched bifurcations (of
 either diagram, with no partner of their kind and order within the sum of their stated
-errors), counted per stretch of the diagram (the causes named in the xfail reason of
-tests/continuation/test_continuation_roundoff.py).
+errors), counted per stretch of the diagram (the causes: docs/continuation_report.md,
+"Events within a grazing point's resolution").
 
     python benchmarks/roundoff_structure.py            (all four; ~5 diagrams, minutes of CPU)
     python benchmarks/roundoff_structure.py 0 3        (the reference and perturbations 0, 3)

@@ -19,7 +19,7 @@ from . import _arguments as _args
 from nlbeam import _linalg as la
 from ._newton import ContinuationWarning, ConvergenceError
 from .parallel import Speculator, take, taken
-from .pathfollow import Tracer
+from .pathfollow import GRAZING_RESOLUTION, Tracer
 from .seeding import brute_force
 from .shooting import (Integrator, PeriodicSolution, ShootingProblem, _problem_from_state,
                        forcing, steady_state)
@@ -105,7 +105,12 @@ class Bifurcation(Summary):
     None without stability); note: '' for a bifurcation of the smooth map, or 'at grazing:
     multiplier jumps from .. to .. (non-smooth)' where a multiplier jumps through +1, -1 or the
     unit circle at a grazing point (reported there, with the grazing bracket as tolerance; see
-    Tracer._detect_step; its error is that of the grazing point)."""
+    Tracer._detect_step; its error is that of the grazing point); 'at grazing: fold located
+    .. from the grazing point, within its resolution' for one located on a smooth side within
+    GRAZING_RESOLUTION (1e-5 of f) of a grazing point, and 'at grazing: multiplier .. -> .. on
+    the smooth side next to it, not located there' for one the locate could not place there
+    (continuation.pathfollow.at_grazing_points: a fold-grazing, flip-grazing .. point, one
+    event whichever side of the corner round-off puts the root on)."""
 
     kind: str
     frequency: float
@@ -587,10 +592,10 @@ def _same_point(a, b, rel=1e-6):
             and abs(a.xmax - b.xmax) <= 1e-4 * max(abs(a.xmax), 1e-300))
 
 
-# the resolution of a grazing point in the parameter, relative (nlbeam.app.scenes.numbers
-# prints grazing frequencies to it, GRAZING_REL): two changes of the number of impacts on one
-# branch closer than this are one event of the diagram
-GRAZING_RESOLUTION = 1e-5
+# GRAZING_RESOLUTION (continuation.pathfollow): the resolution of a grazing point in the
+# parameter, relative (nlbeam.app.scenes.numbers prints grazing frequencies to it,
+# GRAZING_REL): two changes of the number of impacts on one branch closer than this are one
+# event of the diagram
 
 
 def _merged_grazing(bf, bifs):
@@ -772,7 +777,11 @@ def _run_diagram(model, amplitude, p_range, orders, parameter, frequency, tracer
                 continue  # where a branch ran onto another one, its end point is already listed
             bifs.append(bf)
             if L.kind == "period-doubling":
-                pd_points.append((L.point, order, bi if bf.smooth else None))
+                # (one within a grazing point's resolution is reported there: switched from
+                # its root on the smooth side, Located.root; one at a jump is not switched)
+                root = getattr(L, "root", None)
+                pd_points.append((L.point if root is None else root, order,
+                                  bi if bf.smooth or root is not None else None))
         if early is not None:  # (once all are added: a grazing point may absorb the next)
             for bf in bifs[n_bifs:]:
                 early.bifurcation(amplitude, bf)
@@ -1403,8 +1412,12 @@ def _estimate(frc, model, integrator, accuracy, segments, progress, pool=None, e
     digits = target_digits(accuracy)
     frc.settings["accuracy"] = digits
     t = time.perf_counter()
+    tied = _grazing_partners(frc.bifurcations)
     notes = estimate_diagram(frc, model, integrator, accuracy=accuracy, segments=segments,
                              pool=pool, early=early)
+    for bf, g in tied:  # an event at a grazing point has that grazing point's value and error
+        if np.isfinite(g.error):
+            bf.value, bf.frequency, bf.error = g.value, g.frequency, g.error
     if progress is not None:
         progress(f"error estimates: {len(frc.bifurcations)} bifurcations, "
                  f"{sum(int(b.error_sampled.sum()) for b in frc.branches)} branch points "
@@ -1418,6 +1431,25 @@ def _estimate(frc, model, integrator, accuracy, segments, progress, pool=None, e
             "dt_scale leaves) and finer integration (dt_scale=0.5) improve them; "
             "Bifurcation.error and Branch.multipliers_error give the estimates.",
             ContinuationWarning, stacklevel=3)
+
+
+def _grazing_partners(bifs):
+    """(bifurcation reported at a grazing point, that grazing point) pairs: the grazing point
+    of its branch nearest it within the sum of their brackets. Located again on its own, such
+    an event can land elsewhere than its grazing point (the paper model's order-2 fold at
+    9.33417 Hz, a turn at the corner reported at the bracket's other end: its own relocation
+    failed in the reference and kept its bracket, 9.334172 +- 1.9e-5, while its grazing point
+    was estimated at 9.333900 +- 1.4e-4, as the fold was under A x (1 + 1e-13))."""
+    out = []
+    for bf in bifs:
+        if bf.kind == "grazing" or bf.smooth:
+            continue
+        near = [g for g in bifs if g.kind == "grazing" and g.branch == bf.branch
+                and g.order == bf.order and abs(g.value - bf.value)
+                <= g.tolerance + bf.tolerance + 1e-12 * abs(g.value)]
+        if near:
+            out.append((bf, min(near, key=lambda g: abs(g.value - bf.value))))
+    return out
 
 
 def _settings(integ, segments, n_grid, ds, ds_max, max_angle, tol, bif_tol, orders):

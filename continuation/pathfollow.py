@@ -18,6 +18,13 @@ from .corners import (JUMP_HS, Retrace, check_crossing, far_side, fold_ahead, ma
 
 KINDS = ("fold", "period-doubling", "neimark-sacker")  # from the test functions
 
+# the resolution of a grazing point in the parameter, relative (nlbeam.app.scenes.numbers
+# prints grazing frequencies to it, GRAZING_REL): two events of one branch closer than this
+# to each other are one event of the diagram (continuation.diagram merges grazing points;
+# ``at_grazing_points`` puts a fold, period doubling or Neimark-Sacker point within it of a
+# grazing point at the grazing point)
+GRAZING_RESOLUTION = 1e-5
+
 
 class Problem(Protocol):
     """The problem R(u, p) = 0 (n equations, n unknowns u, one parameter p) a Tracer follows.
@@ -109,6 +116,9 @@ class Located:
     tolerance: float
     index: int  # the branch point before it
     note: str = ""  # e.g. 'at grazing: ...' where a multiplier jumps across the unit circle
+    root: Point | None = None  # where one reported at a grazing point was located on a smooth
+    # side next to it (at_grazing_points): the point on the smooth branch (branch switching)
+    placed: bool = True  # False: not located (reported at the end of its bracket)
 
 
 def test_functions(mu):
@@ -967,7 +977,7 @@ class Tracer:
                 t_in = t.copy()
         self.retrace = retrace
         self.end_evaluations = self.n_evaluations - n_at_point
-        return pts, located, reason
+        return pts, at_grazing_points(located, pts), reason
 
     # --- bifurcations on a step ---------------------------------------------------------------
     def _detect_step(self, prob, z, t, ds, prev, pt, tf_prev, tf, jumped, grazing, index):
@@ -984,7 +994,18 @@ class Tracer:
         the grazing point (a multiplier jumps through +1, -1 or the unit circle there) is
         reported at the grazing point with the grazing bracket as tolerance and a ``note``
         naming the jump. So a stability change at (or within round-off of) a grazing point is
-        listed once, wherever round-off puts it relative to the grazing point."""
+        listed once, wherever round-off puts it relative to the grazing point. A sign change
+        on a smooth side that the locate cannot place there is reported at the grazing point
+        too (the root lies between it and the side's end), with the side as its bracket, where
+        the test function's chord puts the root within GRAZING_RESOLUTION of the grazing
+        point: not at the side's end, a point of the branch the event is not at (the paper
+        model's order-2 branch at 9.66425 Hz: the far side's locate failed in one run only,
+        and its fold, reported at the step's end, was later located at another fold 3.4e-4
+        Hz away). Farther, it stays at the side's end (the paper model's order-1 period
+        doubling at 6.647 Hz, 2.3e-3 Hz before the grazing point where the multiplier jumps
+        back across -1: two events).
+        ``at_grazing_points`` (at the end of ``trace``) then makes the events within a
+        grazing point's resolution one event there."""
         out = []
         if grazing is None:
             for k, kind in enumerate(KINDS):
@@ -1033,7 +1054,18 @@ class Tracer:
                     # point, where the branch bends fastest: the chord's)
                     loc = self.locate_chord(prob, a, b, k, ta[k], tb[k])
                 if loc is None:
-                    loc = (b, abs(b.p - a.p))
+                    # not placed on the side: where the test function's chord puts its root
+                    # within GRAZING_RESOLUTION of the grazing point, it is reported there,
+                    # the side (between it and the side's end) its bracket; else at the
+                    # side's end, the side its bracket (and left so: ``placed`` False)
+                    p_est = a.p + ta[k] / (ta[k] - tb[k]) * (b.p - a.p)
+                    if abs(p_est - g_far.p) <= GRAZING_RESOLUTION * abs(g_far.p):
+                        out.append(Located(kind, g_far, max(g_tol, abs(a.p - g_far.p),
+                                                            abs(b.p - g_far.p)), index,
+                                           note=_side_note(kind, a, b)))
+                    else:
+                        out.append(Located(kind, b, abs(b.p - a.p), index, placed=False))
+                    continue
                 out.append(Located(kind, loc[0], loc[1], index))
         return out
 
@@ -1227,6 +1259,74 @@ def _jump_note(kind, a, b):
         return "at grazing: the branch turns back at a corner (non-smooth)"
     return (f"at grazing: multiplier jumps from {_fmt_mu(_critical(a.multipliers, kind))} to "
             f"{_fmt_mu(_critical(b.multipliers, kind))} (non-smooth)")
+
+
+def _side_note(kind, a, b):
+    """The note of a sign change on a smooth side (a .. b) next to a grazing point that the
+    locate could not place on the side: reported at the grazing point."""
+    if a.multipliers is None or b.multipliers is None:
+        return f"at grazing: {kind} on the smooth side next to it, not located (non-smooth)"
+    return (f"at grazing: multiplier {_fmt_mu(_critical(a.multipliers, kind))} -> "
+            f"{_fmt_mu(_critical(b.multipliers, kind))} on the smooth side next to it, not "
+            "located there (non-smooth)")
+
+
+def _within_resolution(L, G, pts, res):
+    """Does the smooth event L lie within the resolution of the grazing point G (``res`` of
+    its parameter), with every branch point between them inside that window too (one local
+    event, not the branch coming back to the same parameter later)? (Not the grazing
+    bracket: near p = 0 a bracket of 6e-6 holds a smooth fold and a corner's fold 2.5e-7
+    apart that the tracer tells apart all the same, tests/continuation/
+    test_crossing_behind_fold.py.)"""
+    g = G.point.p
+    window = res * abs(g)
+    if abs(L.point.p - g) > window:
+        return False
+    lo, hi = sorted((L.index, G.index))
+    return all(abs(pts[j].p - g) <= window for j in range(lo + 1, min(hi, len(pts) - 1) + 1))
+
+
+def at_grazing_points(located, pts, res=GRAZING_RESOLUTION):
+    """``located`` (of one trace through the points ``pts``) with every fold, period doubling
+    and Neimark-Sacker point located on a smooth stretch within ``res`` (relative) of a
+    grazing point of the trace (``_within_resolution``) reported at that grazing point (not
+    smooth: a fold-grazing, flip-grazing ... point, a codimension-2-like event), with a
+    bracket covering both and its root kept (``Located.root``); and the events of one kind
+    reported at one grazing point made one (the widest bracket). Whether the tracer's steps
+    put such a root on the step before the corner, on the near or the far side of the step
+    through it, or could not locate it there (``_detect_step``), is up to round-off; that the
+    event lies at the grazing point is not. (The paper model's order-2 branch at 9.66425 Hz:
+    a fold on each side of the corner within 1e-6 Hz of it; the far one was located in one
+    run only, and the other run merged the two by their value.)"""
+    graz = [G for G in located if G.kind == "grazing"]
+    out = []
+    for L in located:
+        G = (None if L.kind == "grazing" or L.note or not L.placed else
+             next((G for G in graz if _within_resolution(L, G, pts, res)), None))
+        if G is None:
+            out.append(L)
+            continue
+        d = abs(L.point.p - G.point.p)
+        out.append(Located(L.kind, G.point, max(G.tolerance, d + L.tolerance), L.index,
+                           note=f"at grazing: {L.kind} located {d:.1e} from the grazing "
+                                "point, within its resolution (non-smooth)",
+                           root=L.point))
+    merged = []
+    for L in out:
+        o = next((o for o in merged if L.note.startswith("at grazing")
+                  and o.note.startswith("at grazing") and o.kind == L.kind
+                  and o.point is L.point), None)
+        if o is None:
+            merged.append(L)
+            continue
+        o.tolerance = max(o.tolerance, L.tolerance)
+        o.root = o.root if o.root is not None else L.root
+        if not o.note.endswith("within the bracket)"):
+            o.note += " (2 such events within the bracket)"
+        else:
+            head, _, tail = o.note.rpartition(" (")
+            o.note = f"{head} ({int(tail.split()[0]) + 1} such events within the bracket)"
+    return merged
 
 
 def _near_any(prob, zn, z, avoid):

@@ -285,21 +285,13 @@ def test_grazing_points_within_each_others_bracket_are_merged():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="the tracer's path still depends on round-off (issue 13 "
-                   "item 4; measured on s12-roundoff with benchmarks/roundoff_structure.py: "
-                   "x (1 +- 1e-13), A x (1 + 1e-13), dt_scale 1 - 1e-9: 1 / 1 / 3 / 27 unmatched "
-                   "bifurcations (s11-fold: 5 / 4 / 4 / 29)): the fold/flip-grazing points at "
-                   "9.6640-9.6643 Hz (order 2: a fold on each side of the corner, the far one "
-                   "located in one run only, 9.663664 +- 2.4e-4 in the reference; order 1 under "
-                   "A: the PD at the grazing point 9.664019 against 9.664252). Gone: the "
-                   "order-1 grazing estimate at 9.3342 Hz "
-                   "(accuracy._grazing_bisect scans past failed solves), 110.83-110.90 Hz (a "
-                   "'stop' end inside a declared stretch widens it), and s11's 9.168 / 6.648 / "
-                   "66.5 / 67.5 Hz: remove when it passes")
 def test_paper_diagram_keeps_its_structure_under_round_off():
     """The whole paper diagram (A = 0.1 mm, 5-150 Hz, orders 1-3) with m, k, b, K_hertz x
     (1 + 1e-13): the same structure. (On 0312b23, outside those intervals the bifurcation
-    tables print the same; inside them 40 of 129 rows differ.)"""
+    tables print the same; inside them 40 of 129 rows differ.) Passes since session 13
+    (continuation.pathfollow.at_grazing_points: the fold pair at the order-2 grazing point
+    9.66425 Hz is one event in both runs); measured with benchmarks/roundoff_structure.py:
+    0 unmatched bifurcations (main 6b2e8f3: 1, the order-2 fold 9.663664)."""
     def diagram(model):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
