@@ -288,7 +288,10 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
     scaled), unless the solves beyond found a's side going on (the corner lies further: the
     branch creeps towards it first, three times in a row at most, unless a's side went on as
     far as the largest distance). Solutions near ``avoid`` (scaled states of a rolled-back
-    retrace) are skipped; the first one whose check was consistent but whose bisection could
+    retrace) are skipped, and so are those that turn back past a smooth fold beside the corner
+    (``smooth_fold_beside``: no jump represents that stretch; after one, no further jump
+    behind is tried and the creep goes on past three in a row); the first one whose check was
+    consistent but whose bisection could
     not be finished is kept in ``tr.unverified`` (the tracer's last resort). Returns (z,
     evaluation, Point, Crossing), or (z, evaluation, Point, None) for a solution with a's
     number of impacts a little further in the direction of travel on a's stretch
@@ -317,8 +320,7 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
         tr.complete_jacobian(prob, evs)
         b = tr._point(prob, zs, evs)
         cr = check_crossing(tr, prob, a, z_a, t_in, b, zs, strict=False)
-        if cr is not None and ((cr.turn and smooth_fold_beside(tr, a, cr, b))
-                               or fold_ahead(tr, a, cr)):
+        if cr is not None and cr.turn and smooth_fold_beside(tr, a, cr, b):
             # a smooth fold beside the corner lies between a and this solution: no
             # fixed-parameter jump represents that stretch (the paper model at A = 0.2 mm: a
             # jump from 14.538474 to 14.537021 Hz passed the fold 14.528099 and the grazing
