@@ -290,7 +290,8 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
     far as the largest distance). Solutions near ``avoid`` (scaled states of a rolled-back
     retrace) are skipped, and so are those that turn back past a smooth fold beside the corner
     (``smooth_fold_beside``: no jump represents that stretch; after one, no further jump
-    behind is tried and the creep goes on past three in a row); the first one whose check was
+    behind is tried and the creep goes on past three in a row; it is returned only where no
+    creep is left); the first one whose check was
     consistent but whose bisection could
     not be finished is kept in ``tr.unverified`` (the tracer's last resort). Returns (z,
     evaluation, Point, Crossing), or (z, evaluation, Point, None) for a solution with a's
@@ -306,7 +307,7 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
         zs, evs, _ = tr.correct(prob, np.r_[u_scaled, p_scaled], e_p, a.corr, fixed_p=True)
         return zs, evs
 
-    beside = [False]  # a candidate was dropped for a smooth fold beside the corner
+    beside = [None]  # the first candidate dropped for a smooth fold beside the corner
 
     def candidate(zs, evs):
         if np.max(np.abs(zs[:-1] - z_a[:-1])) > tr.jump_max_distance:
@@ -326,7 +327,8 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
             # jump from 14.538474 to 14.537021 Hz passed the fold 14.528099 and the grazing
             # point 14.528206, and 9e-3 Hz of two strands had no point); a's strand is
             # followed on towards the corner instead (creeps, beyond the three in a row)
-            beside[0] = True
+            if beside[0] is None:
+                beside[0] = (zs, evs, b, cr)
             return None
         if cr is not None and cr.connected is None:  # consistent, but the bisection could
             # not be finished (a rough map): kept as the last resort (Tracer.trace)
@@ -372,7 +374,7 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
     behind = same is None or (tr._creeps >= 3 and same_rel < tr.jump_steps[-1])
     for rel in tr.jump_steps if behind else ():  # else a's side goes on beyond: creep on
         # towards the corner first
-        if beside[0]:
+        if beside[0] is not None:
             break  # (a further jump behind lands further along the strand beyond the fold)
         for g in far[-1:]:
             try:
@@ -383,7 +385,7 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
                 res = candidate(zs, evs)
                 if res is not None:
                     return res
-    for zs, evs in (reversed(sames) if tr._creeps < 3 or beside[0] else ()):
+    for zs, evs in (reversed(sames) if tr._creeps < 3 or beside[0] is not None else ()):
         # the furthest creep whose stretch is smooth: its multipliers moved by at most
         # creep_mu_step from a's, or every test function that changes sign on it has its root
         # located on it (a fixed-parameter jump over a cluster of corners or a fold pair that
@@ -398,7 +400,10 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
             continue
         tr._creeps += 1
         return zs, evs, b, None
-    return None
+    # no creep either: the candidate dropped for a smooth fold beside the corner is taken
+    # after all (else the branch would end 'stuck at a corner' where it can go on; the turn
+    # it leaves is named by the diagram's warning, diagram._warn_turns)
+    return beside[0]
 
 
 def _smooth_events(tr, prob, a, b):
