@@ -23,7 +23,7 @@ import numpy as np
 import nlbeam
 
 import continuation as C
-from continuation.turns import turn_indices
+from continuation.turns import unexplained_turns
 
 GAVE_UP = ("stuck at a corner", "step underflow", "no progress", "max_points",
            "could not move the segment boundaries")
@@ -151,15 +151,11 @@ def _digits(err, f):
 def _turns_without_fold(frc, i, noise=1e-6, near=1e-4):
     """How many times branch i turns back in frequency where no fold of that branch (smooth,
     or at a grazing corner) and no period doubling (a switched branch passes through the
-    period doubling it starts or ends at, where it turns) explains it: a retrace when > 0.
-    The branch's polyline turns at a point (index k) and the fold lies on a step next to it,
-    so beyond it: at a maximum f_k the fold must lie in [f_k - near f_k, f_k + h + near f_k],
-    at a minimum in [f_k - h - near f_k, f_k + near f_k], h the longer of the two steps at k
-    (a turning point below a maximum, or above a minimum, is not the one the branch turned
-    at). A fold counts with its tracer bracket (``tolerance``: at a corner the turning point
-    lies on the chord between the bracket's ends, which are not branch points) at its reported
-    frequency and at its level-0 value (the diagram's own step)."""
-    f = np.asarray(frc.branches[i].frequency, dtype=float)
+    period doubling it starts or ends at, where it turns) explains it: a retrace, or a step
+    that passed a grazing point and a fold together, when > 0 (``turns.unexplained_turns``:
+    the diagram warns of the same turns). A fold counts with its tracer bracket
+    (``tolerance``) at its reported frequency and at its level-0 value (the diagram's own
+    step)."""
     marks = []
     for b in frc.bifurcations:
         if (b.kind == "fold" and b.branch == i) or b.kind == "period-doubling":
@@ -167,13 +163,7 @@ def _turns_without_fold(frc, i, noise=1e-6, near=1e-4):
             marks.append((b.frequency, tol))
             if b.levels is not None and len(b.levels) and frc.parameter == "frequency":
                 marks.append((float(b.levels[0]), tol))  # where the diagram's branch turns
-    n = 0
-    for k, sgn in turn_indices(f, noise):
-        h = max(abs(f[k] - f[max(k - 1, 0)]), abs(f[min(k + 1, len(f) - 1)] - f[k]))
-        e = near * abs(f[k])
-        lo, hi = (f[k] - e, f[k] + h + e) if sgn > 0 else (f[k] - h - e, f[k] + e)
-        n += not any(m - t <= hi and m + t >= lo for m, t in marks)
-    return n
+    return len(unexplained_turns(frc.branches[i].frequency, marks, noise, near))
 
 
 def main(argv=None):

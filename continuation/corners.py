@@ -198,20 +198,63 @@ def smooth_fold_beside(tr, a, crossing, b):
     (between a and the bracket's near end ``crossing.lo``, both with a's number of impacts) or
     on the far side (between ``crossing.hi`` and b)? Then a real multiplier passed +1 on a
     smooth stretch: the sign of prod(mu - 1) differs between the two points of that stretch,
-    where ``fold_sign`` trusts both (no real multiplier within ``tr.fold_margin`` of +1). A
-    turn of such a step is the smooth fold's, not the corner's, and the step is too long to
-    place either (the paper model at 9.3339 Hz: a step from 9.33459 to 9.33552 Hz passed the
-    grazing point 9.33421 and the fold 9.333877 behind it, and the grazing point was put at
-    9.33376, beyond the fold, where the branch has no point). Sides the bisection did not
-    reach (lo is a, or hi is b) tell nothing."""
+    where ``fold_sign`` trusts both (no real multiplier within ``tr.fold_margin`` of +1), or,
+    where it does not, the sign of det(dR/du) of their Jacobians differs (``_jacobian_sign``:
+    trusted where the tangent's parameter component exceeds ``tr.turn_tol``). A turn of such
+    a step is the smooth fold's, not the corner's, and the step is too long to place either
+    (the paper model at 9.3339 Hz: a step from 9.33459 to 9.33552 Hz passed the grazing point
+    9.33421 and the fold 9.333877 behind it, and the grazing point was put at 9.33376, beyond
+    the fold, where the branch has no point; at A = 0.2 mm, 14.5282 Hz: a step from 14.538474
+    to 14.537021 Hz passed the grazing point 14.528206 and the fold 14.528099 beyond it, and
+    the bracket's far end, 1e-4 Hz from that fold, has a real multiplier within fold_margin of
+    +1: 9e-3 Hz of two strands had no point). Sides the bisection did not reach (lo is a, or
+    hi is b) tell nothing."""
     for p, q in ((a, crossing.lo), (crossing.hi, b)):
         if p is q:
             continue
+        if crossing.turn and p is crossing.hi and _near_fold(tr, p):
+            return True
         s_p, ok_p = fold_sign(p, tr.fold_margin)
         s_q, ok_q = fold_sign(q, tr.fold_margin)
-        if ok_p and ok_q and s_p != s_q:
+        if ok_p and ok_q:
+            if s_p != s_q:
+                return True
+            continue
+        s_p, ok_p = _jacobian_sign(p, tr.turn_tol)
+        s_q, ok_q = _jacobian_sign(q, tr.turn_tol)
+        if ok_p and ok_q and p.problem is q.problem and s_p != s_q:
             return True
     return False
+
+
+def _near_fold(tr, pt):
+    """Is the bracket end pt so near a fold that neither sign tells which way its strand runs
+    (a real multiplier within ``tr.fold_margin`` of +1, and the Jacobian's tangent within
+    ``tr.turn_tol`` of p = const)? Nothing known (no Jacobian) tells nothing."""
+    return (pt.jac is not None and not fold_sign(pt, tr.fold_margin)[1]
+            and not _jacobian_sign(pt, tr.turn_tol)[1])
+
+
+def _jacobian_sign(pt, turn_tol):
+    """(sign of det(dR/du), reliable) of a branch point from its scaled Jacobian [dR/du |
+    dR/dp] (the corrector's: the variational dR/du with its secant correction). Along a smooth
+    stretch of one problem it changes sign exactly at a fold, like prod(mu - 1), and it is
+    trusted where the parameter component of the Jacobian's unit null vector (the tangent) is
+    above ``turn_tol``: that component is |det(dR/du)| over the norm of all n-by-n minors, so
+    the point lies clearly off a fold (where a real multiplier within fold_margin of +1
+    leaves the multipliers' sign in doubt, the Jacobian's may still be clear)."""
+    J = pt.jac
+    if J is None:
+        return 0.0, False
+    n = J.shape[0]
+    s = la.det_sign(J[:, :n])
+    if s == 0.0:
+        return 0.0, False
+    try:
+        t = tangent(J, np.eye(n + 1)[n])
+    except np.linalg.LinAlgError:
+        return 0.0, False
+    return float(s), bool(abs(t[-1]) > turn_tol)
 
 
 def fold_ahead(tr, a, crossing):
@@ -245,7 +288,11 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
     scaled), unless the solves beyond found a's side going on (the corner lies further: the
     branch creeps towards it first, three times in a row at most, unless a's side went on as
     far as the largest distance). Solutions near ``avoid`` (scaled states of a rolled-back
-    retrace) are skipped; the first one whose check was consistent but whose bisection could
+    retrace) are skipped, and so are those that turn back past a smooth fold beside the corner
+    (``smooth_fold_beside``: no jump represents that stretch; after one, no further jump
+    behind is tried and the creep goes on past three in a row; it is returned only where no
+    creep is left); the first one whose check was
+    consistent but whose bisection could
     not be finished is kept in ``tr.unverified`` (the tracer's last resort). Returns (z,
     evaluation, Point, Crossing), or (z, evaluation, Point, None) for a solution with a's
     number of impacts a little further in the direction of travel on a's stretch
@@ -260,6 +307,8 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
         zs, evs, _ = tr.correct(prob, np.r_[u_scaled, p_scaled], e_p, a.corr, fixed_p=True)
         return zs, evs
 
+    beside = [None]  # the first candidate dropped for a smooth fold beside the corner
+
     def candidate(zs, evs):
         if np.max(np.abs(zs[:-1] - z_a[:-1])) > tr.jump_max_distance:
             return None  # another orbit
@@ -272,6 +321,15 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
         tr.complete_jacobian(prob, evs)
         b = tr._point(prob, zs, evs)
         cr = check_crossing(tr, prob, a, z_a, t_in, b, zs, strict=False)
+        if cr is not None and cr.turn and smooth_fold_beside(tr, a, cr, b):
+            # a smooth fold beside the corner lies between a and this solution: no
+            # fixed-parameter jump represents that stretch (the paper model at A = 0.2 mm: a
+            # jump from 14.538474 to 14.537021 Hz passed the fold 14.528099 and the grazing
+            # point 14.528206, and 9e-3 Hz of two strands had no point); a's strand is
+            # followed on towards the corner instead (creeps, beyond the three in a row)
+            if beside[0] is None:
+                beside[0] = (zs, evs, b, cr)
+            return None
         if cr is not None and cr.connected is None:  # consistent, but the bisection could
             # not be finished (a rough map): kept as the last resort (Tracer.trace)
             if tr.unverified is None:
@@ -316,6 +374,8 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
     behind = same is None or (tr._creeps >= 3 and same_rel < tr.jump_steps[-1])
     for rel in tr.jump_steps if behind else ():  # else a's side goes on beyond: creep on
         # towards the corner first
+        if beside[0] is not None:
+            break  # (a further jump behind lands further along the strand beyond the fold)
         for g in far[-1:]:
             try:
                 zs, evs = solve_at(g, z_a[-1] - sp * rel * unit)
@@ -325,7 +385,7 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
                 res = candidate(zs, evs)
                 if res is not None:
                     return res
-    for zs, evs in (reversed(sames) if tr._creeps < 3 else ()):
+    for zs, evs in (reversed(sames) if tr._creeps < 3 or beside[0] is not None else ()):
         # the furthest creep whose stretch is smooth: its multipliers moved by at most
         # creep_mu_step from a's, or every test function that changes sign on it has its root
         # located on it (a fixed-parameter jump over a cluster of corners or a fold pair that
@@ -340,7 +400,10 @@ def far_side(tr, prob, a, z_a, t_in, guesses, avoid):
             continue
         tr._creeps += 1
         return zs, evs, b, None
-    return None
+    # no creep either: the candidate dropped for a smooth fold beside the corner is taken
+    # after all (else the branch would end 'stuck at a corner' where it can go on; the turn
+    # it leaves is named by the diagram's warning, diagram._warn_turns)
+    return beside[0]
 
 
 def _smooth_events(tr, prob, a, b):

@@ -21,6 +21,7 @@ from ._newton import ContinuationWarning, ConvergenceError
 from .parallel import Speculator, take, taken
 from .pathfollow import GRAZING_RESOLUTION, Tracer
 from .seeding import brute_force
+from .turns import unexplained_turns
 from .shooting import (Integrator, PeriodicSolution, ShootingProblem, _problem_from_state,
                        forcing, steady_state)
 
@@ -1112,6 +1113,29 @@ def _coverage(branches, p_range, orders):
     return gaps, early
 
 
+def _warn_turns(branches, bifs, parameter, unit):
+    """One ContinuationWarning naming every place where a branch turns back in the parameter
+    with no located fold (of that branch) or period doubling next to it
+    (``turns.unexplained_turns``): the branch holds no point of the stretch beyond, and what it
+    draws there is a chord across it."""
+    found = []
+    for i, br in enumerate(branches):
+        marks = [(b.value, float(b.tolerance) if np.isfinite(b.tolerance) else 0.0)
+                 for b in bifs if (b.kind == "fold" and b.branch == i)
+                 or b.kind == "period-doubling"]
+        found += [(i, br.order, v) for v in unexplained_turns(br.values, marks)]
+    if found:
+        where = "; ".join(f"branch {i} (order {n}) at {v:.9g}{' ' + unit if unit else ''}"
+                          for i, n, v in found)
+        warnings.warn(
+            f"continuation: {len(found)} turn(s) of a branch in {parameter} where no fold or "
+            f"period doubling was located: {where}. A step there passed a grazing point and a "
+            "fold together (or the branch retraced itself), so the stretch beyond the turn has "
+            "no point and is drawn as a chord; try a smaller ds_max or max_angle, finer "
+            "integration (dt_scale=0.5, steps_per_contact=64), or continue_parameter from a "
+            "point next to it", ContinuationWarning, stacklevel=3)
+
+
 def _warn_coverage(branches, p_range, orders, parameter, unit, what_to_try, bifs=()):
     """One ContinuationWarning listing every part of p_range that no branch of a requested
     order covers (see ``_coverage``), the branch ends inside it where the tracer gave up and
@@ -1316,6 +1340,7 @@ def frequency_response(model, amplitude, f_range, orders=(1, 2, 3), *, n_grid=30
                        "periodic_solution), a finer brute-force grid (n_grid), finer integration "
                        "(dt_scale=0.5, steps_per_contact=64), multiple shooting (segments=4), a "
                        "smaller ds_max or max_points larger.", bifs)
+        _warn_turns(branches, bifs, "frequency", "Hz")
         sup = _superharmonics(branches, model, integrator)
         frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=float(amplitude),
                                 parameter="frequency", p_range=(f_lo, f_hi), branches=branches,
@@ -1389,6 +1414,7 @@ def continue_parameter(solution, parameter, p_range, *, model, segments=1, integ
     bifs = []
     for L in loc:
         bifs.append(_bifurcation(L, solution.order, 0))
+    _warn_turns([br], bifs, parameter, "Hz" if parameter == "frequency" else "")
     frc = FrequencyResponse(model_parameters=model.parameters(), amplitude=solution.amplitude,
                             parameter=parameter, p_range=(lo, hi), branches=[br],
                             bifurcations=bifs,
