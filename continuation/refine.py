@@ -215,8 +215,11 @@ def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders
     extrapolated value and ``error`` its error estimate (Refined.tolerance; ``tolerance`` stays
     the diagram's bracket). Bifurcations whose extended system does not converge, and those at
     a grazing point (``Bifurcation.smooth`` False), keep their values and errors and get
-    ``refined = None``; ``refine_status`` says which ('refined' or 'failed: <reason>'; both
-    saved with the diagram). Returns the list of (bifurcation, Refined or the error)."""
+    ``refined = None``, except one the tracer located on a smooth stretch beside a grazing
+    point and reports at it ('at grazing: fold located ...'): its extended system is solved,
+    and a regular root inside the grazing bracket is taken; ``refine_status`` says which
+    ('refined' or 'failed: <reason>'; both saved with the diagram). Returns the list of
+    (bifurcation, Refined or the error)."""
     from ._arguments import check_refine
 
     check_refine(frc, model, kinds, orders, levels, segments, tol, target_digits, max_levels)
@@ -226,7 +229,8 @@ def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders
     for bf in frc.bifurcations:
         if bf.kind not in kinds or (orders is not None and bf.order not in orders):
             continue
-        if not getattr(bf, "smooth", True):
+        beside = _beside_grazing(bf)
+        if not getattr(bf, "smooth", True) and not beside:
             # a multiplier jumps across the unit circle at a grazing point: no regular root of
             # the extended system; the grazing bracket stays the tolerance
             out.append((bf, ConvergenceError(f"not refined: {bf.note}")))
@@ -240,6 +244,10 @@ def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders
                 break
             except ConvergenceError as exc:
                 r = exc
+        if beside and not isinstance(r, ConvergenceError) \
+                and abs(r.value - bf.frequency) > bf.tolerance:
+            r = ConvergenceError(f"the regular root found, {r.value:.9g}, lies outside the "
+                                 f"grazing bracket {bf.frequency:.9g} +- {bf.tolerance:.1e}")
         if isinstance(r, ConvergenceError):
             out.append((bf, r))
             bf.refine_status = f"failed: {r}"
@@ -250,6 +258,14 @@ def refine_bifurcations(frc, model, *, kinds=("fold", "period-doubling"), orders
         bf.error = r.tolerance
         out.append((bf, r))
     return out
+
+
+def _beside_grazing(bf):
+    """A fold / period doubling the tracer located on a smooth stretch next to a grazing point
+    and reports at it (pathfollow.at_grazing_points: 'at grazing: <kind> located d from the
+    grazing point'): its regular root may exist, and the extended system decides."""
+    return (not getattr(bf, "smooth", True)
+            and str(getattr(bf, "note", "")).startswith(f"at grazing: {bf.kind} located"))
 
 
 def bifurcation_amplitude(bif, amplitude):

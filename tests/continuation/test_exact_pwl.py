@@ -199,18 +199,19 @@ def test_diagram_points_next_to_grazing_within_stated_error(diagram):
 
 def _exact_crossings(frc, exact, order):
     """Exact folds / period doublings on the order's branches: where det(M -+ I) of the exact
-    orbits through consecutive branch points changes sign, as (kind, f_lo, f_hi)."""
+    orbits through consecutive branch points changes sign, as (kind, f_lo, f_hi) (points
+    without an exact orbit, None, are passed over)."""
     out = []
     for b, exs in zip(frc.branches, exact):
         if b.order != order:
             continue
-        for k in range(len(exs) - 1):
+        kept = [(f, ex) for f, ex in zip(b.frequency, exs) if ex is not None]
+        for (fa, ea), (fb, eb) in zip(kept[:-1], kept[1:]):
             for sign, kind in ((1.0, "fold"), (-1.0, "period-doubling")):
-                da = np.linalg.det(exs[k].monodromy - sign * np.eye(2))
-                db = np.linalg.det(exs[k + 1].monodromy - sign * np.eye(2))
+                da = np.linalg.det(ea.monodromy - sign * np.eye(2))
+                db = np.linalg.det(eb.monodromy - sign * np.eye(2))
                 if da * db < 0:
-                    out.append((kind, min(b.frequency[k], b.frequency[k + 1]),
-                                max(b.frequency[k], b.frequency[k + 1])))
+                    out.append((kind, min(fa, fb), max(fa, fb)))
     return out
 
 
@@ -253,10 +254,24 @@ def test_stiff_stop_15_to_100_hz_against_the_exact_orbits():
         warnings.simplefilter("ignore")
         frc = C.frequency_response(osc.system(), osc.amplitude, (15.0, 100.0), orders=(1, 2))
     assert frc.uncovered(1) == []
-    exact = [[orbit(osc, b.frequency[i], b.state0[i], b.order) for i in range(len(b.values))]
-             for b in frc.branches]
+    folds = np.array([bf.frequency for bf in frc.bifurcations if bf.kind == "fold"])
+
+    def exact_or_none(b, i):
+        # within 1e-5 f of a fold the default step's orbit may lie beyond the exact fold
+        # (25.54354393 Hz, 1e-6 Hz past the fold 25.5435449 beside the grazing point, where
+        # the orbit enters the stop by 7e-9 m): there the exact orbit does not exist
+        try:
+            return orbit(osc, b.frequency[i], b.state0[i], b.order)
+        except RuntimeError:
+            if np.min(np.abs(folds - b.frequency[i]), initial=np.inf) < 1e-5 * b.frequency[i]:
+                return None
+            raise
+    exact = [[exact_or_none(b, i) for i in range(len(b.values))] for b in frc.branches]
+    assert sum(ex is None for exs in exact for ex in exs) <= 2
     for b, exs in zip(frc.branches, exact):
         for i, ex in enumerate(exs):
+            if ex is None:
+                continue
             big = np.abs(ex.multipliers).max()
             if abs(big - 1.0) > b.multipliers_error[i]:
                 assert bool(b.stable[i]) == ex.stable, (b.order, b.frequency[i], big)
