@@ -113,6 +113,20 @@ def meet(tr, prob, z_a, t_a, z_b, t_b, rel=0.05):
     return k
 
 
+def _same_strand_point(tr, prob, a, z_a, zs, evs):
+    """(Point, tangent away from a) of the fixed-parameter solution zs if it has a's number of
+    impacts and lies within ``tr.jump_max_distance`` of a (scaled); else None."""
+    if (evs.n_impacts != a.n_impacts
+            or np.max(np.abs(zs[:-1] - z_a[:-1])) > tr.jump_max_distance):
+        return None
+    tr.complete_jacobian(prob, evs)
+    b = tr._point(prob, zs, evs)
+    try:
+        return b, tangent(b.jac, zs - z_a)
+    except np.linalg.LinAlgError:
+        return None
+
+
 def crossing(tr, prob, a, z_a, t_in, dps):
     """A branch point beyond a kink ahead of the branch point a (z_a scaled, direction of
     travel t_in, unit): fixed-parameter solves at the scaled parameter distances ``dps``
@@ -141,15 +155,10 @@ def crossing(tr, prob, a, z_a, t_in, dps):
                 print("  kink: p %.9g impacts %d (a: %d), distance %.3g" % (
                     zs[-1] * prob.scale_p, evs.n_impacts, a.n_impacts,
                     np.max(np.abs(zs[:-1] - z_a[:-1]))))
-            if (evs.n_impacts != a.n_impacts
-                    or np.max(np.abs(zs[:-1] - z_a[:-1])) > tr.jump_max_distance):
+            cand = _same_strand_point(tr, prob, a, z_a, zs, evs)
+            if cand is None:
                 continue
-            tr.complete_jacobian(prob, evs)
-            b = tr._point(prob, zs, evs)
-            try:
-                t_b = tangent(b.jac, zs - z_a)
-            except np.linalg.LinAlgError:
-                continue
+            b, t_b = cand
             k = meet(tr, prob, z_a, t_a, zs, t_b)
             if tr.debug:
                 print("  kink: lines %s, meet %s" % (_closest(z_a, t_a, zs, t_b), k is not None))
@@ -188,18 +197,14 @@ def turn(tr, prob, a, z_a, t_in, dps, d_fail):
                     print("  kink turn: no solution at p %.9g" % ((z_a[-1] - sp * dp)
                                                                    * prob.scale_p))
                 continue
-            dist = np.max(np.abs(zs[:-1] - z_a[:-1]))
             if tr.debug:
                 print("  kink turn: p %.9g impacts %d (a: %d), distance %.3g" % (
-                    zs[-1] * prob.scale_p, evs.n_impacts, a.n_impacts, dist))
-            if evs.n_impacts != a.n_impacts or dist > tr.jump_max_distance:
+                    zs[-1] * prob.scale_p, evs.n_impacts, a.n_impacts,
+                    np.max(np.abs(zs[:-1] - z_a[:-1]))))
+            cand = _same_strand_point(tr, prob, a, z_a, zs, evs)
+            if cand is None:
                 continue
-            tr.complete_jacobian(prob, evs)
-            b = tr._point(prob, zs, evs)
-            try:
-                t_b = tangent(b.jac, zs - z_a)
-            except np.linalg.LinAlgError:
-                continue
+            b, t_b = cand
             if t_b[-1] * sp > 0:
                 continue  # not back in the parameter: no turn (crossing's case)
             s_b, ok_b = fold_sign(b, tr.fold_margin)
