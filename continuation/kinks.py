@@ -113,18 +113,33 @@ def meet(tr, prob, z_a, t_a, z_b, t_b, rel=0.05):
     return k
 
 
-def _same_strand_point(tr, prob, a, z_a, zs, evs):
-    """(Point, tangent away from a) of the fixed-parameter solution zs if it has a's number of
-    impacts and lies within ``tr.jump_max_distance`` of a (scaled); else None."""
-    if (evs.n_impacts != a.n_impacts
-            or np.max(np.abs(zs[:-1] - z_a[:-1])) > tr.jump_max_distance):
-        return None
-    tr.complete_jacobian(prob, evs)
-    b = tr._point(prob, zs, evs)
-    try:
-        return b, tangent(b.jac, zs - z_a)
-    except np.linalg.LinAlgError:
-        return None
+def _same_strand_solutions(tr, prob, a, z_a, trials, tag):
+    """For each (state guess, scaled parameter) of ``trials`` (lazily, in order): the
+    fixed-parameter solution with a's number of impacts within ``tr.jump_max_distance`` of a
+    (scaled), as (z, evaluation, Point, tangent away from a); trials that do not converge or
+    land elsewhere are passed over. ``tag`` names the caller in debug output."""
+    e_p = np.zeros(len(z_a))
+    e_p[-1] = 1.0
+    for g, p in trials:
+        try:
+            zs, evs, _ = tr.correct(prob, np.r_[g, p], e_p, a.corr, fixed_p=True)
+        except ConvergenceError:
+            if tr.debug:
+                print("  %s: no solution at p %.9g" % (tag, p * prob.scale_p))
+            continue
+        dist = np.max(np.abs(zs[:-1] - z_a[:-1]))
+        if tr.debug:
+            print("  %s: p %.9g impacts %d (a: %d), distance %.3g" % (
+                tag, zs[-1] * prob.scale_p, evs.n_impacts, a.n_impacts, dist))
+        if evs.n_impacts != a.n_impacts or dist > tr.jump_max_distance:
+            continue
+        tr.complete_jacobian(prob, evs)
+        b = tr._point(prob, zs, evs)
+        try:
+            t_b = tangent(b.jac, zs - z_a)
+        except np.linalg.LinAlgError:
+            continue
+        yield zs, evs, b, t_b
 
 
 def crossing(tr, prob, a, z_a, t_in, dps):
@@ -135,38 +150,23 @@ def crossing(tr, prob, a, z_a, t_in, dps):
     through a kink (``meet``: a solution whose tangent is a's, before the kink, is passed
     over). Returns (z, evaluation, Point, tangent away from a, kink point)
     or None."""
-    e_p = np.zeros(len(z_a))
-    e_p[-1] = 1.0
     sp = 1.0 if t_in[-1] >= 0 else -1.0
     t_a = tangent(a.jac, t_in) if a.jac is not None else t_in
-    for dp in dps:
-        guesses = [z_a[:-1]]
-        if abs(t_in[-1]) > 1e-3:
-            guesses.insert(0, z_a[:-1] + t_in[:-1] / t_in[-1] * sp * dp)
-        for g in guesses:
-            try:
-                zs, evs, _ = tr.correct(prob, np.r_[g, z_a[-1] + sp * dp], e_p, a.corr,
-                                        fixed_p=True)
-            except ConvergenceError:
-                if tr.debug:
-                    print("  kink: no solution at p %.9g" % ((z_a[-1] + sp * dp) * prob.scale_p))
-                continue
-            if tr.debug:
-                print("  kink: p %.9g impacts %d (a: %d), distance %.3g" % (
-                    zs[-1] * prob.scale_p, evs.n_impacts, a.n_impacts,
-                    np.max(np.abs(zs[:-1] - z_a[:-1]))))
-            cand = _same_strand_point(tr, prob, a, z_a, zs, evs)
-            if cand is None:
-                continue
-            b, t_b = cand
-            k = meet(tr, prob, z_a, t_a, zs, t_b)
-            if tr.debug:
-                print("  kink: lines %s, meet %s" % (_closest(z_a, t_a, zs, t_b), k is not None))
-            # (None where the tangents are parallel:
-            # b lies before the kink, on a's smooth stretch; a larger distance is tried)
-            if k is not None:
-                b.tangent = t_b
-                return zs, evs, b, t_b, k
+
+    def trials():
+        for dp in dps:
+            if abs(t_in[-1]) > 1e-3:
+                yield z_a[:-1] + t_in[:-1] / t_in[-1] * sp * dp, z_a[-1] + sp * dp
+            yield z_a[:-1], z_a[-1] + sp * dp
+    for zs, evs, b, t_b in _same_strand_solutions(tr, prob, a, z_a, trials(), "kink"):
+        k = meet(tr, prob, z_a, t_a, zs, t_b)
+        if tr.debug:
+            print("  kink: lines %s, meet %s" % (_closest(z_a, t_a, zs, t_b), k is not None))
+        # (None where the tangents are parallel:
+        # b lies before the kink, on a's smooth stretch; a larger distance is tried)
+        if k is not None:
+            b.tangent = t_b
+            return zs, evs, b, t_b, k
     return None
 
 
@@ -181,42 +181,24 @@ def turn(tr, prob, a, z_a, t_in, dps, d_fail):
     have the other sign of prod(mu - 1) (``corners.fold_sign``: unless either sign is
     uncertain, as a corner's turn must). Returns (z, evaluation, Point, tangent away from the
     kink, kink point) or None."""
-    e_p = np.zeros(len(z_a))
-    e_p[-1] = 1.0
     sp = 1.0 if t_in[-1] >= 0 else -1.0
     t_a = tangent(a.jac, t_in) if a.jac is not None else t_in
     s_a, ok_a = fold_sign(a, tr.fold_margin)
     starts = [z_a[:-1] + k * d_fail * t_in[:-1] for k in (1.0, 2.0)]
-    for dp in dps:
-        for g in starts:
-            try:
-                zs, evs, _ = tr.correct(prob, np.r_[g, z_a[-1] - sp * dp], e_p, a.corr,
-                                        fixed_p=True)
-            except ConvergenceError:
-                if tr.debug:
-                    print("  kink turn: no solution at p %.9g" % ((z_a[-1] - sp * dp)
-                                                                   * prob.scale_p))
-                continue
+    trials = ((g, z_a[-1] - sp * dp) for dp in dps for g in starts)
+    for zs, evs, b, t_b in _same_strand_solutions(tr, prob, a, z_a, trials, "kink turn"):
+        if t_b[-1] * sp > 0:
+            continue  # not back in the parameter: no turn (crossing's case)
+        s_b, ok_b = fold_sign(b, tr.fold_margin)
+        if ok_a and ok_b and s_a == s_b:
             if tr.debug:
-                print("  kink turn: p %.9g impacts %d (a: %d), distance %.3g" % (
-                    zs[-1] * prob.scale_p, evs.n_impacts, a.n_impacts,
-                    np.max(np.abs(zs[:-1] - z_a[:-1]))))
-            cand = _same_strand_point(tr, prob, a, z_a, zs, evs)
-            if cand is None:
-                continue
-            b, t_b = cand
-            if t_b[-1] * sp > 0:
-                continue  # not back in the parameter: no turn (crossing's case)
-            s_b, ok_b = fold_sign(b, tr.fold_margin)
-            if ok_a and ok_b and s_a == s_b:
-                if tr.debug:
-                    print("  kink turn: the sign of prod(mu - 1) does not change")
-                continue
-            k = meet(tr, prob, z_a, t_a, zs, t_b)
-            if tr.debug:
-                print("  kink turn: lines %s, meet %s" % (_closest(z_a, t_a, zs, t_b),
-                                                         k is not None))
-            if k is not None:
-                b.tangent = t_b
-                return zs, evs, b, t_b, k
+                print("  kink turn: the sign of prod(mu - 1) does not change")
+            continue
+        k = meet(tr, prob, z_a, t_a, zs, t_b)
+        if tr.debug:
+            print("  kink turn: lines %s, meet %s" % (_closest(z_a, t_a, zs, t_b),
+                                                     k is not None))
+        if k is not None:
+            b.tangent = t_b
+            return zs, evs, b, t_b, k
     return None

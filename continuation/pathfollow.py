@@ -1286,6 +1286,16 @@ def _within_resolution(L, G, pts, res):
     return all(abs(pts[j].p - g) <= window for j in range(lo + 1, min(hi, len(pts) - 1) + 1))
 
 
+def _beside_grazing_head(kind):
+    return f"at grazing: {kind} located"
+
+
+def located_beside_grazing(kind, note):
+    """Is this event (kind, note) one that at_grazing_points moved from its smooth root to a
+    grazing point? (Its regular root may exist: refine_bifurcations tries it.)"""
+    return str(note).startswith(_beside_grazing_head(kind))
+
+
 def at_grazing_points(located, pts, res=GRAZING_RESOLUTION):
     """``located`` (of one trace through the points ``pts``) with every fold, period doubling
     and Neimark-Sacker point located on a smooth stretch within ``res`` (relative) of a
@@ -1308,7 +1318,7 @@ def at_grazing_points(located, pts, res=GRAZING_RESOLUTION):
             continue
         d = abs(L.point.p - G.point.p)
         out.append(Located(L.kind, G.point, max(G.tolerance, d + L.tolerance), L.index,
-                           note=f"at grazing: {L.kind} located {d:.1e} from the grazing "
+                           note=f"{_beside_grazing_head(L.kind)} {d:.1e} from the grazing "
                                 "point, within its resolution (non-smooth)",
                            root=L.point))
     merged = []

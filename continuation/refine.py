@@ -22,6 +22,7 @@ from nlbeam.summary import Summary
 
 from nlbeam import _linalg as la
 from ._newton import ConvergenceError
+from .pathfollow import located_beside_grazing
 from .shooting import Integrator, _problem_from_state
 
 # graded RK4, free-flight step and contact step halved together: the located frequencies
@@ -265,7 +266,7 @@ def _beside_grazing(bf):
     and reports at it (pathfollow.at_grazing_points: 'at grazing: <kind> located d from the
     grazing point'): its regular root may exist, and the extended system decides."""
     return (not getattr(bf, "smooth", True)
-            and str(getattr(bf, "note", "")).startswith(f"at grazing: {bf.kind} located"))
+            and located_beside_grazing(bf.kind, getattr(bf, "note", "")))
 
 
 def bifurcation_amplitude(bif, amplitude):

@@ -13,6 +13,7 @@ from numba import njit
 
 import nlbeam
 from continuation.pathfollow import Problem
+from continuation.shooting import Evaluation
 from nlbeam import _kernels
 
 
@@ -196,6 +197,15 @@ duration = 1.5
 transient = 0.1
 psd_resolution = 2.0
 """
+#: a tiny diagram (orders 1, 42-45 Hz, three grid frequencies, no error estimates)
+TINY_DIAGRAM = """
+[periodic]
+amplitude = 1e-4
+f_range = [42.0, 45.0]
+orders = [1]
+n_grid = 3
+accuracy = "off"
+"""
 #: a PSD figure and a moments table of it
 PSD_FIGURE = """
 [[figure]]
@@ -239,3 +249,24 @@ class ToyProblem(Problem):
 
     def on_branch(self, u, p):
         return float(np.max(np.abs(self.evaluate(u, p, jac=False, jac_p=False).R)))
+
+
+class ScalarToyProblem(ToyProblem):
+    """A ToyProblem whose residual is (r(u, p), -u[1]): ``scalar(u, p)`` gives r and dr/du[0]
+    (piecewise in u[0]), ``r_p`` is dr/dp (a constant); Jacobian diag(dr, -1), one monodromy
+    I + 0.1 J, the impacts ``side(u)``."""
+
+    r_p = -1.0
+
+    def scalar(self, u, p):
+        raise NotImplementedError
+
+    def evaluate(self, u, p, jac=True, jac_p=True):
+        r, dr = self.scalar(u, p)
+        J = np.array([[dr, 0.0], [0.0, -1.0]])
+        return Evaluation(np.array([r, -u[1]]), J if jac else None,
+                          self.jacobian_p(u, p) if jac_p else None,
+                          [np.eye(2) + 0.1 * J] if jac else [], abs(u[0]), self.side(u))
+
+    def jacobian_p(self, u, p, ev=None):
+        return np.array([self.r_p, 0.0])

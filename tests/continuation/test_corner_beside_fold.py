@@ -12,12 +12,11 @@ import numpy as np
 import pytest
 
 from continuation.pathfollow import Tracer
-from continuation.shooting import Evaluation
 from continuation.turns import turn_indices
-from helpers import ToyProblem
+from helpers import ScalarToyProblem
 
 
-class CornerThenFold(ToyProblem):
+class CornerThenFold(ScalarToyProblem):
     """R = (r(u1, p), -u2); side 0 (u1 < 0): r = -p + g u1 (g < 0: p falls as u1 rises);
     side 1 (u1 >= 0): r = k (u1 - uf)^2 - k uf^2 - p (continuous across u1 = 0). The branch
     comes down side 0 to the corner (u1 = 0, p = 0) and passes it straight (p still falls on
@@ -31,20 +30,11 @@ class CornerThenFold(ToyProblem):
         super().__init__()
         self.k, self.uf, self.g = k, uf, g
 
-    def evaluate(self, u, p, jac=True, jac_p=True):
-        s = self.side(u)
-        if s == 0:
-            r, dr = self.g * u[0] - p, self.g
-        else:
-            d = u[0] - self.uf
-            r, dr = self.k * (d * d - self.uf ** 2) - p, 2.0 * self.k * d
-        J = np.array([[dr, 0.0], [0.0, -1.0]])
-        return Evaluation(np.array([r, -u[1]]), J if jac else None,
-                          np.array([-1.0, 0.0]) if jac_p else None,
-                          [np.eye(2) + 0.1 * J] if jac else [], abs(u[0]), s)
-
-    def jacobian_p(self, u, p, ev=None):
-        return np.array([-1.0, 0.0])
+    def scalar(self, u, p):
+        if self.side(u) == 0:
+            return self.g * u[0] - p, self.g
+        d = u[0] - self.uf
+        return self.k * (d * d - self.uf ** 2) - p, 2.0 * self.k * d
 
 
 def _trace(k, uf, g, p0=0.5):

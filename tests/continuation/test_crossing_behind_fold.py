@@ -7,11 +7,10 @@ import numpy as np
 import pytest
 
 from continuation.pathfollow import Tracer
-from continuation.shooting import Evaluation
-from helpers import ToyProblem
+from helpers import ScalarToyProblem
 
 
-class FoldThenCorner(ToyProblem):
+class FoldThenCorner(ScalarToyProblem):
     """R = (r(u1, p), -u2); side 0 (u1 < 0): r = k (u1 - uf)^2 - p, side 1 (u1 >= 0):
     r = k uf^2 - p + g u1 (continuous across u1 = 0). Multipliers: eigenvalues of
     I + dR/du / 10 (prod(mu - 1) has the sign of det(dR/du)). For uf < 0 the branch, coming
@@ -24,19 +23,10 @@ class FoldThenCorner(ToyProblem):
         super().__init__()
         self.k, self.uf, self.g = k, uf, g
 
-    def evaluate(self, u, p, jac=True, jac_p=True):
-        s = self.side(u)
-        if s == 0:
-            r, dr = self.k * (u[0] - self.uf) ** 2 - p, 2.0 * self.k * (u[0] - self.uf)
-        else:
-            r, dr = self.k * self.uf ** 2 - p + self.g * u[0], self.g
-        J = np.array([[dr, 0.0], [0.0, -1.0]])
-        return Evaluation(np.array([r, -u[1]]), J if jac else None,
-                          np.array([-1.0, 0.0]) if jac_p else None,
-                          [np.eye(2) + 0.1 * J] if jac else [], abs(u[0]), s)
-
-    def jacobian_p(self, u, p, ev=None):
-        return np.array([-1.0, 0.0])
+    def scalar(self, u, p):
+        if self.side(u) == 0:
+            return self.k * (u[0] - self.uf) ** 2 - p, 2.0 * self.k * (u[0] - self.uf)
+        return self.k * self.uf ** 2 - p + self.g * u[0], self.g
 
 
 
@@ -88,27 +78,21 @@ def test_corner_before_the_fold_is_still_passed_straight(k, uf):
     assert abs(loc[0].point.p - k * uf ** 2) < 1e-4
 
 
-class StrandBehind(ToyProblem):
+class StrandBehind(ScalarToyProblem):
     """R = (r(u1, p), -u2) with three pieces: u1 < -0.015 (0 impacts): r = u1 + p (strand A,
     p falling as u1 rises, ending at u1 = -0.015 where r jumps); -0.015 <= u1 < 0 (0 impacts):
     r = p - 0.021 - u1 / 10 (strand B, p = 0.0195 .. 0.021); u1 >= 0 (1 impact):
     r = u1 + p - 0.021. B and the 1-impact strand meet at a corner (u1 = 0, p = 0.021,
     a non-smooth fold: dr/du1 changes sign); A meets neither."""
 
-    def evaluate(self, u, p, jac=True, jac_p=True):
-        if u[0] < -0.015:
-            r, dr = u[0] + p, 1.0
-        elif u[0] < 0.0:
-            r, dr = p - 0.021 - 0.1 * u[0], -0.1
-        else:
-            r, dr = u[0] + p - 0.021, 1.0
-        J = np.array([[dr, 0.0], [0.0, -1.0]])
-        return Evaluation(np.array([r, -u[1]]), J if jac else None,
-                          np.array([1.0, 0.0]) if jac_p else None,
-                          [np.eye(2) + 0.1 * J] if jac else [], abs(u[0]), self.side(u))
+    r_p = 1.0
 
-    def jacobian_p(self, u, p, ev=None):
-        return np.array([1.0, 0.0])
+    def scalar(self, u, p):
+        if u[0] < -0.015:
+            return u[0] + p, 1.0
+        if u[0] < 0.0:
+            return p - 0.021 - 0.1 * u[0], -0.1
+        return u[0] + p - 0.021, 1.0
 
 
 

@@ -10,11 +10,10 @@ import pytest
 
 from continuation import pathfollow as PF
 from continuation.pathfollow import GRAZING_RESOLUTION, Located, Point, Tracer, at_grazing_points
-from continuation.shooting import Evaluation
-from helpers import ToyProblem
+from helpers import ScalarToyProblem
 
 
-class ZCorner(ToyProblem):
+class ZCorner(ScalarToyProblem):
     """R = (P(u1) - (p - 1), -u2): side 0 (u1 < 0) P = a (u1 - f0)^2, a smooth fold at
     u1 = f0 < 0, p = 1; side 1 (u1 >= 0) P = a f0^2 + b u1 - c u1^2 with b = -4 a f0 and
     c = b / (2 f1), a smooth fold at u1 = f1 > 0, p = 1 + a f0^2 + b f1 / 2. The corner
@@ -38,15 +37,9 @@ class ZCorner(ToyProblem):
         f1 = self.b / (2.0 * self.c)
         return 1.0, 1.0 + self.P(f1)[0], 1.0 + self.P(0.0)[0]  # near fold, far fold, corner
 
-    def evaluate(self, u, p, jac=True, jac_p=True):
+    def scalar(self, u, p):
         P, dP = self.P(u[0])
-        J = np.array([[dP, 0.0], [0.0, -1.0]])
-        return Evaluation(np.array([P - (p - 1.0), -u[1]]), J if jac else None,
-                          np.array([-1.0, 0.0]) if jac_p else None,
-                          [np.eye(2) + 0.1 * J] if jac else [], abs(u[0]), self.side(u))
-
-    def jacobian_p(self, u, p, ev=None):
-        return np.array([-1.0, 0.0])
+        return P - (p - 1.0), dP
 
 
 def _trace(a, f, x0):

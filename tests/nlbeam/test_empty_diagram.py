@@ -11,19 +11,12 @@ import pytest
 
 import continuation
 import nlbeam._kernels as kernels
-from helpers import write_scene
+from helpers import TINY_DIAGRAM, write_scene
 from nlbeam.app.cli import main
 from nlbeam.app.scenes.empty import EmptyDiagramError
 from nlbeam.scenes import run_scene
 
-SCENE = """
-title = "an empty diagram"
-[periodic]
-amplitude = 1e-4
-f_range = [42.0, 45.0]
-orders = [1]
-n_grid = 3
-accuracy = "off"
+SCENE = 'title = "an empty diagram"\n' + TINY_DIAGRAM + """
 [[figure]]
 kind = "frc"
 file = "frc.png"

@@ -8,18 +8,11 @@ import os
 import h5py
 import numpy as np
 
-from helpers import TINY_STOCHASTIC, write_scene
+from helpers import TINY_DIAGRAM, TINY_STOCHASTIC, write_scene
 from nlbeam.app.scenes.batch import run_scenes
 from nlbeam.scenes import load_scene, run_scene
 
-DIAGRAM = """
-[periodic]
-amplitude = 1e-4
-f_range = [42.0, 45.0]
-orders = [1]
-n_grid = 3
-accuracy = "off"
-"""
+DIAGRAM = TINY_DIAGRAM
 FIRST = 'title = "first"\n' + DIAGRAM + TINY_STOCHASTIC + """
 [[figure]]
 kind = "compare"
