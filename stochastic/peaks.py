@@ -123,6 +123,12 @@ def significant_peaks(f, P, dof=None, *, min_prominence=0.3, confidence=DEFAULT_
         raise ValueError("psd: frequencies must increase")
     if not (math.isfinite(confidence) and confidence >= 0):
         raise ValueError(f"confidence: must be a finite z >= 0, got {confidence!r}")
+    if not (math.isfinite(min_prominence) and min_prominence >= 0):
+        raise ValueError(f"min_prominence: must be a finite number of decades >= 0, "
+                         f"got {min_prominence!r}")
+    if not (math.isfinite(background_hz) and background_hz >= 2 * df):
+        raise ValueError(f"background_hz: must be at least two bins ({2 * df:g} Hz), "
+                         f"got {background_hz!r}")
     floor = max(P.max(), 1e-300) * 1e-16
     L = np.log10(np.maximum(P, floor))
     # a PSD from 0 Hz is even in f: mirrored there (the background and the peaks), content

@@ -93,3 +93,15 @@ def test_chi_square_noise_makes_no_peak():
         covered += int(abs(got.frequency[j] - f_top) <= 2 * got.frequency_error[j])
     assert min(n_found) == 1 and sum(n != 1 for n in n_found) <= 3, np.bincount(n_found)
     assert covered >= 270
+
+
+@pytest.mark.parametrize("kw, name", [({"confidence": -1.0}, "confidence"),
+                                      ({"min_prominence": -0.1}, "min_prominence"),
+                                      ({"min_prominence": math.nan}, "min_prominence"),
+                                      ({"background_hz": 0.5}, "background_hz"),
+                                      ({"dof": 0.0}, "dof")])
+def test_bad_arguments_name_the_parameter(kw, name):
+    f = np.arange(0.0, 100.0, 0.5)
+    P = 1.0 + np.exp(-0.5 * ((f - 40.0) / 2.0) ** 2)
+    with pytest.raises(ValueError, match=f"^{name}: "):
+        significant_peaks(f, P, **kw)
